@@ -1,0 +1,1 @@
+"""supportless: re-pose a rigged model so it prints with less support."""
