@@ -1,0 +1,488 @@
+"""Shared geometry helpers and the numba ray-grid kernel.
+
+The self-intersection volume and the column support estimator both cast a
+regular grid of rays along the printing direction ``up`` through the model's
+footprint, collect every surface crossing along each ray, sort the crossings
+by height and sweep upwards.  Both quantities come out of one sweep, so a
+single kernel computes them together.
+
+Coordinates
+-----------
+Vertices are first expressed in a right-handed orthonormal frame whose last
+axis is ``up``: ``(u, w, z)`` in 3D and ``(u, z)`` in 2D.  Since the change of
+frame is a rotation, orientations (triangle winding, signed areas) are kept.
+
+Robust crossing rule
+--------------------
+A ray at pixel centre ``p`` crosses a triangle when ``p`` lies inside the
+triangle's projection.  Each edge function is evaluated with the edge's end
+points in a canonical (lexicographic) order, so two triangles sharing an edge
+get bit-identical values of opposite sign, and ties (``p`` exactly on an edge
+or a vertex) are broken by the symbolic perturbation ``p + (eps, eps**2)``.
+Every ray therefore crosses a closed, consistently oriented surface an
+even number of times, and a ray through a shared edge or vertex is counted
+exactly once.  In 2D the same idea reduces to half-open intervals
+``[min(u_a, u_b), max(u_a, u_b))``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+__all__ = [
+    "prepare",
+    "plane_basis",
+    "to_frame",
+    "orientation_sign",
+    "boundary_edges",
+    "ray_grid",
+]
+
+
+# ---------------------------------------------------------------------------
+# numpy helpers
+# ---------------------------------------------------------------------------
+
+
+def prepare(vertices, faces, up):
+    """Validate and normalise the common arguments.
+
+    Parameters
+    ----------
+    vertices : (P, n, d) or (n, d) float64
+        Vertex positions of one pose or a batch of ``P`` poses, ``d`` in {2, 3}.
+    faces : (f, 3) int
+        Triangle indices.
+    up : (d,) float
+        Printing direction; any nonzero vector, normalised here.
+
+    Returns
+    -------
+    V : (P, n, d) float64
+        Batched vertices (``P = 1`` for a single pose).
+    F : (f, 3) int64
+        Faces as a contiguous int64 array.
+    up : (d,) float64
+        Unit printing direction.
+    single : bool
+        True when ``vertices`` was a single pose ``(n, d)``.
+    """
+    V = np.asarray(vertices, dtype=np.float64)
+    single = V.ndim == 2
+    if single:
+        V = V[None]
+    if V.ndim != 3 or V.shape[-1] not in (2, 3):
+        raise ValueError("vertices must have shape (P, n, d) or (n, d) with d in {2, 3}")
+    V = np.ascontiguousarray(V)
+    F = np.ascontiguousarray(np.asarray(faces, dtype=np.int64).reshape(-1, 3))
+    d = V.shape[-1]
+    u = np.asarray(up, dtype=np.float64).reshape(-1)
+    if u.shape != (d,):
+        raise ValueError(f"up must be a vector of length {d}")
+    nrm = np.linalg.norm(u)
+    if not np.isfinite(nrm) or nrm == 0.0:
+        raise ValueError("up must be a finite nonzero vector")
+    return V, F, u / nrm, single
+
+
+def plane_basis(up):
+    """Orthonormal basis of the plane orthogonal to ``up``.
+
+    Parameters
+    ----------
+    up : (d,) float64
+        Unit vector, ``d`` in {2, 3}.
+
+    Returns
+    -------
+    B : (d - 1, d) float64
+        Rows span the plane orthogonal to ``up``; the frame
+        ``(B[0], ..., up)`` is right-handed (determinant +1).
+    """
+    up = np.asarray(up, dtype=np.float64)
+    if up.shape[0] == 2:
+        return np.array([[up[1], -up[0]]])
+    helper = np.zeros(3)
+    helper[np.argmin(np.abs(up))] = 1.0
+    e1 = np.cross(helper, up)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    return np.stack([e1, e2])
+
+
+def to_frame(V, up):
+    """Express vertices in the right-handed frame ``(plane basis, up)``.
+
+    Parameters
+    ----------
+    V : (P, n, d) float64
+        Batched vertices.
+    up : (d,) float64
+        Unit printing direction.
+
+    Returns
+    -------
+    X : (P, n, d) float64
+        Coordinates; the last one is the height along ``up``.
+    """
+    R = np.vstack([plane_basis(up), up[None]])  # (d, d), rows = new axes
+    return np.ascontiguousarray(V @ R.T)
+
+
+def orientation_sign(V, F):
+    """Sign of the total signed volume (3D) or signed area (2D) per pose.
+
+    Parameters
+    ----------
+    V : (P, n, d) float64
+        Batched vertices.
+    F : (f, 3) int64
+        Triangles.
+
+    Returns
+    -------
+    s : (P,) float64
+        +1 when the faces are outward oriented (counter-clockwise in 2D),
+        -1 when inverted; +1 when the total is exactly zero.
+    """
+    a, b, c = V[:, F[:, 0]], V[:, F[:, 1]], V[:, F[:, 2]]
+    if V.shape[-1] == 3:
+        tot = np.einsum("pfi,pfi->p", a, np.cross(b, c))
+    else:
+        e1, e2 = b - a, c - a
+        tot = (e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]).sum(axis=1)
+    return np.where(tot < 0.0, -1.0, 1.0)
+
+
+def boundary_edges(faces, vertices=None):
+    """Boundary edges of a 2D triangle mesh, oriented outward.
+
+    A boundary edge is used by exactly one triangle.  Edges keep the
+    direction in which they appear in their triangle, so for a
+    counter-clockwise mesh the region lies to the left of each edge
+    ``a -> b`` and the outward normal is ``(b - a)`` rotated clockwise,
+    i.e. ``(dy, -dx) / |b - a|``.
+
+    Parameters
+    ----------
+    faces : (f, 3) int
+        Consistently oriented triangles.
+    vertices : (n, 2) float, optional
+        If given and the total signed area is negative (clockwise mesh), the
+        edges are reversed so that the convention above holds.
+
+    Returns
+    -------
+    edges : (e, 2) int64
+        Directed boundary edges.
+    """
+    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    key = np.sort(E, axis=1)
+    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    edges = np.ascontiguousarray(E[cnt[inv.reshape(-1)] == 1])
+    if vertices is not None:
+        V = np.asarray(vertices, dtype=np.float64)
+        if V.ndim == 3:
+            V = V[0]
+        if orientation_sign(V[None], F)[0] < 0:
+            edges = np.ascontiguousarray(edges[:, ::-1])
+    return edges
+
+
+# ---------------------------------------------------------------------------
+# numba kernels
+# ---------------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _side(ax, ay, bx, by, px, py):
+    """Sign (+1 left, -1 right) of p w.r.t. directed edge a->b, never 0
+    unless the edge is degenerate (symbolic perturbation p + (eps, eps^2))."""
+    flip = 1.0
+    if bx < ax or (bx == ax and by < ay):
+        ax, ay, bx, by = bx, by, ax, ay
+        flip = -1.0
+    dx = bx - ax
+    dy = by - ay
+    e = dx * (py - ay) - dy * (px - ax)
+    if e == 0.0:
+        if dy != 0.0:
+            e = -dy
+        else:
+            e = dx
+    if e > 0.0:
+        return flip
+    elif e < 0.0:
+        return -flip
+    return 0.0
+
+
+@njit(cache=True)
+def _grow(pix, zz, cc):
+    n = pix.shape[0] * 2
+    p2 = np.empty(n, np.int64)
+    z2 = np.empty(n, np.float64)
+    c2 = np.empty(n, np.float64)
+    p2[: pix.shape[0]] = pix
+    z2[: pix.shape[0]] = zz
+    c2[: pix.shape[0]] = cc
+    return p2, z2, c2
+
+
+@njit(cache=True)
+def _sweep(pix, zz, cc, m, npix, zplate, tau):
+    """Sort crossings per pixel and sweep upwards.
+
+    Returns (summed length inside >= 2 layers, summed support column length).
+    """
+    start = np.zeros(npix + 1, np.int64)
+    for k in range(m):
+        start[pix[k] + 1] += 1
+    for q in range(npix):
+        start[q + 1] += start[q]
+    pos = start[:npix].copy()
+    zs = np.empty(m, np.float64)
+    cs = np.empty(m, np.float64)
+    for k in range(m):
+        q = pix[k]
+        t = pos[q]
+        zs[t] = zz[k]
+        cs[t] = cc[k]
+        pos[q] = t + 1
+    inter = 0.0
+    sup = 0.0
+    for q in range(npix):
+        s0 = start[q]
+        s1 = start[q + 1]
+        if s1 == s0:
+            continue
+        # insertion sort of the (small) segment by height
+        for i in range(s0 + 1, s1):
+            zk = zs[i]
+            ck = cs[i]
+            j = i - 1
+            while j >= s0 and zs[j] > zk:
+                zs[j + 1] = zs[j]
+                cs[j + 1] = cs[j]
+                j -= 1
+            zs[j + 1] = zk
+            cs[j + 1] = ck
+        count = 0
+        zprev = zplate
+        for k in range(s0, s1):
+            z = zs[k]
+            c = cs[k]
+            if count >= 2:
+                inter += z - zprev
+            if c < 0.0:  # downward-facing: entering material
+                if count <= 0 and c < -tau:
+                    # column from this risky face down to the top of the
+                    # material below (previous crossing) or the build plate
+                    lo = zs[k - 1] if k > s0 else zplate
+                    if z > lo:
+                        sup += z - lo
+                count += 1
+            else:  # upward-facing: leaving material
+                count -= 1
+            zprev = z
+    return inter, sup
+
+
+@njit(cache=True)
+def _pose3(X, F, orient, R, tau):
+    n = X.shape[0]
+    umin = np.inf
+    umax = -np.inf
+    wmin = np.inf
+    wmax = -np.inf
+    zplate = np.inf
+    for i in range(n):
+        u = X[i, 0]
+        w = X[i, 1]
+        umin = min(umin, u)
+        umax = max(umax, u)
+        wmin = min(wmin, w)
+        wmax = max(wmax, w)
+        zplate = min(zplate, X[i, 2])
+    du = umax - umin
+    dw = wmax - wmin
+    L = max(du, dw)
+    if not (L > 0.0) or F.shape[0] == 0:
+        return 0.0, 0.0
+    cell = L / R
+    nx = max(1, int(np.ceil(du / cell - 1e-9)))
+    ny = max(1, int(np.ceil(dw / cell - 1e-9)))
+    u0 = umin + 0.5 * (du - nx * cell)
+    w0 = wmin + 0.5 * (dw - ny * cell)
+    cap = 4 * nx * ny + 64
+    pix = np.empty(cap, np.int64)
+    zz = np.empty(cap, np.float64)
+    cc = np.empty(cap, np.float64)
+    m = 0
+    for f in range(F.shape[0]):
+        i0 = F[f, 0]
+        i1 = F[f, 1]
+        i2 = F[f, 2]
+        ax = X[i0, 0]
+        ay = X[i0, 1]
+        az = X[i0, 2]
+        bx = X[i1, 0]
+        by = X[i1, 1]
+        bz = X[i1, 2]
+        cx = X[i2, 0]
+        cy = X[i2, 1]
+        cz = X[i2, 2]
+        e1x = bx - ax
+        e1y = by - ay
+        e1z = bz - az
+        e2x = cx - ax
+        e2y = cy - ay
+        e2z = cz - az
+        nxv = e1y * e2z - e1z * e2y
+        nyv = e1z * e2x - e1x * e2z
+        nzv = e1x * e2y - e1y * e2x  # = doubled signed projected area
+        if nzv == 0.0:
+            continue
+        nlen = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
+        cosf = orient * nzv / nlen
+        s = 1.0 if nzv > 0.0 else -1.0
+        gx = -nxv / nzv
+        gy = -nyv / nzv
+        lo_u = min(ax, min(bx, cx))
+        hi_u = max(ax, max(bx, cx))
+        lo_w = min(ay, min(by, cy))
+        hi_w = max(ay, max(by, cy))
+        i_lo = max(0, int(np.floor((lo_u - u0) / cell - 0.5)))
+        i_hi = min(nx - 1, int(np.ceil((hi_u - u0) / cell - 0.5)))
+        j_lo = max(0, int(np.floor((lo_w - w0) / cell - 0.5)))
+        j_hi = min(ny - 1, int(np.ceil((hi_w - w0) / cell - 0.5)))
+        for j in range(j_lo, j_hi + 1):
+            py = w0 + (j + 0.5) * cell
+            for i in range(i_lo, i_hi + 1):
+                px = u0 + (i + 0.5) * cell
+                if _side(ax, ay, bx, by, px, py) * s <= 0.0:
+                    continue
+                if _side(bx, by, cx, cy, px, py) * s <= 0.0:
+                    continue
+                if _side(cx, cy, ax, ay, px, py) * s <= 0.0:
+                    continue
+                if m == pix.shape[0]:
+                    pix, zz, cc = _grow(pix, zz, cc)
+                pix[m] = j * nx + i
+                zz[m] = az + gx * (px - ax) + gy * (py - ay)
+                cc[m] = cosf
+                m += 1
+    inter, sup = _sweep(pix, zz, cc, m, nx * ny, zplate, tau)
+    area = cell * cell
+    return inter * area, sup * area
+
+
+@njit(cache=True)
+def _pose2(X, E, orient, R, tau):
+    n = X.shape[0]
+    umin = np.inf
+    umax = -np.inf
+    zplate = np.inf
+    for i in range(n):
+        umin = min(umin, X[i, 0])
+        umax = max(umax, X[i, 0])
+        zplate = min(zplate, X[i, 1])
+    L = umax - umin
+    if not (L > 0.0) or E.shape[0] == 0:
+        return 0.0, 0.0
+    cell = L / R
+    nx = R
+    u0 = umin
+    cap = 4 * nx + 64
+    pix = np.empty(cap, np.int64)
+    zz = np.empty(cap, np.float64)
+    cc = np.empty(cap, np.float64)
+    m = 0
+    for e in range(E.shape[0]):
+        a = E[e, 0]
+        b = E[e, 1]
+        ax = X[a, 0]
+        az = X[a, 1]
+        bx = X[b, 0]
+        bz = X[b, 1]
+        ex = bx - ax
+        if ex == 0.0:
+            continue
+        ez = bz - az
+        cosf = -orient * ex / np.sqrt(ex * ex + ez * ez)
+        lo = min(ax, bx)
+        hi = max(ax, bx)
+        slope = ez / ex
+        i_lo = max(0, int(np.floor((lo - u0) / cell - 0.5)))
+        i_hi = min(nx - 1, int(np.ceil((hi - u0) / cell - 0.5)))
+        for i in range(i_lo, i_hi + 1):
+            px = u0 + (i + 0.5) * cell
+            if px < lo or px >= hi:
+                continue
+            if m == pix.shape[0]:
+                pix, zz, cc = _grow(pix, zz, cc)
+            pix[m] = i
+            zz[m] = az + slope * (px - ax)
+            cc[m] = cosf
+            m += 1
+    inter, sup = _sweep(pix, zz, cc, m, nx, zplate, tau)
+    return inter * cell, sup * cell
+
+
+@njit(cache=True, parallel=True)
+def _grid3_batch(X, F, orient, R, tau):
+    P = X.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    for p in prange(P):
+        a, b = _pose3(X[p], F, orient[p], R, tau)
+        out[p, 0] = a
+        out[p, 1] = b
+    return out
+
+
+@njit(cache=True, parallel=True)
+def _grid2_batch(X, E, orient, R, tau):
+    P = X.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    for p in prange(P):
+        a, b = _pose2(X[p], E, orient[p], R, tau)
+        out[p, 0] = a
+        out[p, 1] = b
+    return out
+
+
+def ray_grid(V, F, up, resolution, tau):
+    """Cast the ray grid for a batch of poses.
+
+    Parameters
+    ----------
+    V : (P, n, d) float64
+        Batched vertices, ``d`` in {2, 3}.
+    F : (f, 3) int64
+        Triangles (in 2D: a triangle mesh whose boundary is the surface).
+    up : (d,) float64
+        Unit printing direction.
+    resolution : int
+        Number of ray cells along the longer side of the footprint (square
+        cells).  In 2D the footprint is an interval split into
+        ``resolution`` cells.
+    tau : float
+        Risk threshold: a crossing face with ``n . up < -tau`` is risky.
+
+    Returns
+    -------
+    out : (P, 2) float64
+        Column 0: volume (area in 2D) covered by at least two layers of
+        material.  Column 1: column support volume (area in 2D).
+    """
+    R = int(resolution)
+    if R < 1:
+        raise ValueError("resolution must be a positive integer")
+    orient = np.ascontiguousarray(orientation_sign(V, F))
+    X = to_frame(V, up)
+    if V.shape[-1] == 3:
+        return _grid3_batch(X, F, orient, R, float(tau))
+    E = boundary_edges(F)
+    return _grid2_batch(X, E, orient, R, float(tau))

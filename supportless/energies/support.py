@@ -1,0 +1,57 @@
+"""Column support estimator.
+
+The same grid of rays as :mod:`supportless.energies.intersection` is cast
+along ``up`` through the footprint.  Along each ray, every *risky* crossing
+where the ray enters material from air (outward normal with
+``n . up < -cos(theta)``) needs a vertical support column that runs down to
+the previous crossing below it -- the top of the material underneath (an
+upward-facing face) -- or to the build plate (the lowest vertex of the pose)
+when nothing lies below.  Column lengths are summed and multiplied by the
+cell area.
+
+Unlike the prism energy in :mod:`supportless.energies.overhang`, this does
+not count support below parts that rest on the model itself, and only what
+lies inside the footprint is counted.  Downward faces met while already
+inside material (self-intersections) need no support and are ignored.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._raycast import prepare, ray_grid
+
+__all__ = ["support_volume", "DEFAULT_RESOLUTION"]
+
+#: Default number of ray cells along the longer footprint side.
+DEFAULT_RESOLUTION = 128
+
+
+def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_RESOLUTION):
+    """Volume (area in 2D) of vertical support columns under risky faces.
+
+    Parameters
+    ----------
+    vertices : (P, n, d) or (n, d) float64
+        Deformed vertex positions, ``d`` in {2, 3}.
+    faces : (f, 3) int
+        Consistently oriented triangles of a closed surface (3D), or of a
+        planar region whose boundary edges are the surface (2D).
+    up : (d,) float
+        Printing direction (normalised internally).
+    overhang_angle : float
+        Threshold slope ``theta`` in degrees from the build plate (default
+        45); a face is risky when ``n . up < -cos(theta)``.
+    resolution : int
+        Number of square ray cells along the longer side of the footprint
+        (default 128).
+
+    Returns
+    -------
+    volume : (P,) float64 or float
+        Support column volume per pose.
+    """
+    V, F, u, single = prepare(vertices, faces, up)
+    tau = float(np.cos(np.deg2rad(float(overhang_angle))))
+    res = ray_grid(V, F, u, resolution, tau)[:, 1]
+    return float(res[0]) if single else res
