@@ -1,0 +1,529 @@
+"""Reading and writing the files the tool works with.
+
+Surface meshes (OBJ, STL, PLY, OFF, 3MF, GLB) go through trimesh; skeletons are
+libigl's TGF; precomputed volume meshes and weights are libigl's ``.mesh`` and
+``.dmat``; poses are JSON. Every writer writes a temporary file next to the
+target and renames it, so an interrupted write never leaves a half-written file.
+Every reader raises :class:`~supportless.errors.InputError` with one clear line
+on bad input.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+MESH_FORMATS = ("obj", "stl", "ply", "off", "3mf", "glb")
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+# --------------------------------------------------------------------------- #
+# atomic writes
+# --------------------------------------------------------------------------- #
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path beside ``path``; rename it to ``path`` on success.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final destination. Its folder is created if missing.
+
+    Yields
+    ------
+    tmp : pathlib.Path
+        Where to write. It keeps ``path``'s suffix so format sniffing by
+        extension still works. It is removed if the block raises.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` atomically (temporary file, then rename)."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_json(path: str | os.PathLike, data) -> None:
+    """Write ``data`` as indented JSON to ``path`` atomically."""
+    write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
+
+
+def _json_default(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"cannot write {type(obj).__name__} as JSON")
+
+
+# --------------------------------------------------------------------------- #
+# printing direction
+# --------------------------------------------------------------------------- #
+def parse_up(up, dim: int = 3) -> np.ndarray:
+    """Turn a printing direction into a unit vector.
+
+    Parameters
+    ----------
+    up : str or sequence of float
+        ``"x" | "y" | "z" | "-x" | "-y" | "-z"``, or three (``dim``) numbers,
+        as a sequence or as a string ``"0,1,0"`` / ``"0 1 0"``.
+    dim : int
+        2 for a planar figure (the z component is dropped; it must be 0), else 3.
+
+    Returns
+    -------
+    up : (dim,) float64
+        Unit vector.
+    """
+    if isinstance(up, str):
+        s = up.strip().lower()
+        sign = -1.0 if s.startswith("-") else 1.0
+        key = s.lstrip("+-")
+        if key in _AXES:
+            vec = np.zeros(3)
+            vec[_AXES[key]] = sign
+        else:
+            try:
+                vec = np.array([float(t) for t in s.replace(",", " ").split()])
+            except ValueError:
+                raise InputError(None, f"up direction {up!r} is not x|y|z|-x|-y|-z or three numbers") from None
+    else:
+        vec = np.asarray(up, dtype=float).ravel()
+    if vec.shape == (2,):
+        vec = np.append(vec, 0.0)
+    if vec.shape != (3,) or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
+        raise InputError(None, f"up direction {up!r} must be a nonzero vector of three numbers")
+    vec = vec / np.linalg.norm(vec)
+    if dim == 2:
+        if abs(vec[2]) > 1e-12:
+            raise InputError(None, f"up direction {up!r} must lie in the plane (z = 0) of a planar figure")
+        return vec[:2] / np.linalg.norm(vec[:2])
+    return vec
+
+
+# --------------------------------------------------------------------------- #
+# surface meshes
+# --------------------------------------------------------------------------- #
+def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Read a triangle mesh.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        OBJ, STL, PLY, OFF, 3MF or GLB file. Scenes (3MF, GLB) are flattened
+        into one mesh with their transforms applied. Vertices that coincide
+        exactly are merged (STL stores a triangle soup).
+
+    Returns
+    -------
+    V : (n, 3) float64
+        Vertex positions.
+    F : (f, 3) int64
+        Triangles, 0-based.
+
+    Raises
+    ------
+    InputError
+        Missing file, unknown format, unreadable or empty mesh.
+    """
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    ext = path.suffix.lower().lstrip(".")
+    if ext not in MESH_FORMATS:
+        raise InputError(path, f"unknown mesh format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    try:
+        loaded = trimesh.load(str(path), file_type=ext, process=False, force="mesh")
+    except Exception as exc:  # trimesh raises many types on bad files
+        raise InputError(path, f"cannot read as {ext.upper()}: {_one_line(exc)}") from None
+    V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
+    F = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if len(V) == 0 or len(F) == 0 or F.ndim != 2 or F.shape[1] != 3:
+        raise InputError(path, f"no triangles found in this {ext.upper()} file")
+    if not np.all(np.isfinite(V)):
+        raise InputError(path, "vertex coordinates contain NaN or infinity")
+    V, F = merge_duplicate_vertices(V, F)
+    return V, F
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__
+
+
+def merge_duplicate_vertices(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices at exactly the same position and drop unreferenced ones.
+
+    The order of first occurrence is kept, so a mesh without duplicates comes
+    back unchanged.
+
+    Parameters
+    ----------
+    V : (n, d) float64
+    F : (f, 3) int64
+
+    Returns
+    -------
+    V : (n', d) float64
+    F : (f, 3) int64
+    """
+    used = np.zeros(len(V), bool)
+    used[F.ravel()] = True
+    _, first, inverse = np.unique(V, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    if len(first) == len(V) and used.all():
+        return V, F
+    # canonical representative: the first occurrence of each position
+    rep = first[inverse]
+    F = rep[F]
+    keep = np.zeros(len(V), bool)
+    keep[F.ravel()] = True
+    new_index = np.cumsum(keep) - 1
+    return V[keep], new_index[F].astype(np.int64)
+
+
+def edge_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique undirected edges of a triangle mesh and how many faces use each.
+
+    Parameters
+    ----------
+    F : (f, 3) int64
+
+    Returns
+    -------
+    E : (e, 2) int64
+        Sorted vertex pairs.
+    counts : (e,) int64
+        Number of faces using each edge.
+    """
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    return np.unique(E, axis=0, return_counts=True)
+
+
+def check_closed_surface(V: np.ndarray, F: np.ndarray, path=None) -> None:
+    """Check that a surface is closed, 2-manifold and consistently oriented.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (f, 3) int64
+    path : str, optional
+        Named in the error message.
+
+    Raises
+    ------
+    InputError
+        With the number of boundary or non-manifold edges.
+    """
+    _, counts = edge_counts(F)
+    boundary = int(np.sum(counts == 1))
+    nonmanifold = int(np.sum(counts > 2))
+    if boundary:
+        raise InputError(
+            path,
+            f"surface is not closed: {boundary} boundary edges; close the holes "
+            "(e.g. with a mesh repair tool) and try again",
+        )
+    if nonmanifold:
+        raise InputError(path, f"surface is not manifold: {nonmanifold} edges are shared by more than two faces")
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    _, dcounts = np.unique(directed, axis=0, return_counts=True)
+    if np.any(dcounts > 1):
+        raise InputError(path, "surface is not consistently oriented: some neighbouring faces have opposite winding")
+
+
+def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
+    """Write a triangle mesh atomically, in the format the extension names.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``.stl``, ``.obj``, ``.ply``, ``.off``, ``.3mf`` or ``.glb``.
+    V : (n, 3) or (n, 2) float64
+        Planar vertices are written with z = 0.
+    F : (f, 3) int64
+    """
+    import trimesh
+
+    path = Path(path)
+    ext = path.suffix.lower().lstrip(".")
+    if ext not in MESH_FORMATS:
+        raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    V = np.asarray(V, dtype=np.float64)
+    if V.shape[1] == 2:
+        V = np.column_stack([V, np.zeros(len(V))])
+    mesh = trimesh.Trimesh(V, np.asarray(F, dtype=np.int64), process=False)
+    with atomic_path(path) as tmp:
+        mesh.export(str(tmp), file_type=ext)
+
+
+# --------------------------------------------------------------------------- #
+# TGF skeletons
+# --------------------------------------------------------------------------- #
+def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Read a skeleton in libigl's TGF format.
+
+    A joint section (``index x y z [extra columns]``), a line ``#``, a bone
+    section (``i j [extra columns]``, 1-based joint indices) and optionally a
+    final ``#``. Extra columns are ignored.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    joints : (j, 3) float64
+        Joint positions in file order.
+    bones : (m, 2) int64
+        0-based joint indices ``[root, tip]`` in file order.
+
+    Raises
+    ------
+    InputError
+        Missing file, malformed line, empty skeleton, index out of range.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        lines = path.read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path, f"cannot read skeleton: {_one_line(exc)}") from None
+    joints, bones, section = [], [], 0
+    for lineno, line in enumerate(lines, 1):
+        tokens = line.split()
+        if not tokens:
+            continue
+        if tokens[0].startswith("#"):
+            section += 1
+            continue
+        try:
+            if section == 0:
+                if len(tokens) < 4:
+                    raise ValueError
+                joints.append([float(t) for t in tokens[1:4]])
+            elif section == 1:
+                if len(tokens) < 2:
+                    raise ValueError
+                bones.append([int(tokens[0]), int(tokens[1])])
+        except ValueError:
+            what = "joint 'index x y z'" if section == 0 else "bone 'i j'"
+            raise InputError(path, f"line {lineno} is not a {what} line: {line.strip()!r}") from None
+    if not joints:
+        raise InputError(path, "skeleton has no joints; a TGF file lists joints, then '#', then bones")
+    if not bones:
+        raise InputError(path, "skeleton has no bones; after the joints and a '#' line, list bones as 'i j'")
+    J = np.array(joints, dtype=np.float64)
+    B = np.array(bones, dtype=np.int64) - 1
+    bad = np.flatnonzero((B < 0).any(1) | (B >= len(J)).any(1))
+    if len(bad):
+        i = bad[0]
+        raise InputError(
+            path,
+            f"bone {i + 1} ({bones[i][0]} {bones[i][1]}) refers to a joint out of range 1..{len(J)}",
+        )
+    if np.any(B[:, 0] == B[:, 1]):
+        i = int(np.flatnonzero(B[:, 0] == B[:, 1])[0])
+        raise InputError(path, f"bone {i + 1} joins joint {bones[i][0]} to itself")
+    if not np.all(np.isfinite(J)):
+        raise InputError(path, "joint coordinates contain NaN or infinity")
+    return J, B
+
+
+def write_tgf(path: str | os.PathLike, joints: np.ndarray, bones: np.ndarray) -> None:
+    """Write a skeleton as TGF (1-based), atomically.
+
+    Parameters
+    ----------
+    joints : (j, 2) or (j, 3) float64
+        Planar joints are written with z = 0.
+    bones : (m, 2) int64
+        0-based.
+    """
+    J = np.asarray(joints, dtype=np.float64)
+    if J.shape[1] == 2:
+        J = np.column_stack([J, np.zeros(len(J))])
+    out = [f"{i + 1} {x:.17g} {y:.17g} {z:.17g}" for i, (x, y, z) in enumerate(J)]
+    out.append("#")
+    out += [f"{a + 1} {b + 1}" for a, b in np.asarray(bones, dtype=np.int64)]
+    out.append("#")
+    write_text(path, "\n".join(out) + "\n")
+
+
+# --------------------------------------------------------------------------- #
+# libigl .mesh / .dmat
+# --------------------------------------------------------------------------- #
+def read_tet_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """Read a tetrahedral mesh in libigl/Medit ``.mesh`` format.
+
+    Returns
+    -------
+    V : (t, 3) float64
+    T : (k, 4) int64
+    """
+    import igl
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        V, T, _ = igl.readMESH(str(path))
+    except Exception as exc:
+        raise InputError(path, f"cannot read tet mesh: {_one_line(exc)}") from None
+    V = np.asarray(V, np.float64)
+    T = np.asarray(T, np.int64)
+    if len(T) == 0 or T.shape[1] != 4:
+        raise InputError(path, "no tetrahedra found")
+    if T.min() < 0 or T.max() >= len(V):
+        raise InputError(path, "tetrahedra refer to vertices out of range")
+    return V, T
+
+
+def write_tet_mesh(path: str | os.PathLike, V: np.ndarray, T: np.ndarray, F: np.ndarray | None = None) -> None:
+    """Write a tetrahedral mesh as ``.mesh``, atomically."""
+    import igl
+
+    F = np.zeros((0, 3), np.int64) if F is None else np.asarray(F, np.int64)
+    with atomic_path(path) as tmp:
+        igl.writeMESH(str(tmp), np.asarray(V, np.float64), np.asarray(T, np.int64), F)
+
+
+def read_dmat(path: str | os.PathLike, shape: tuple[int | None, int | None] | None = None) -> np.ndarray:
+    """Read a dense matrix in libigl's ``.dmat`` format.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    shape : (rows, cols), optional
+        Expected shape; ``None`` entries are not checked.
+
+    Returns
+    -------
+    M : (rows, cols) float64
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        tokens = path.read_text().split()
+        cols, rows = int(tokens[0]), int(tokens[1])
+        data = np.array([float(t) for t in tokens[2 : 2 + rows * cols]])
+        if data.size != rows * cols:
+            raise ValueError("file ends early")
+    except (ValueError, IndexError, UnicodeDecodeError) as exc:
+        raise InputError(path, f"not an ASCII .dmat matrix ({_one_line(exc)})") from None
+    M = data.reshape(cols, rows).T  # column-major
+    if shape is not None:
+        for axis, (want, got) in enumerate(zip(shape, M.shape)):
+            if want is not None and want != got:
+                raise InputError(
+                    path,
+                    f"matrix is {M.shape[0]}x{M.shape[1]} but {shape[0] or '?'}x{shape[1] or '?'} was expected "
+                    f"({'one row per vertex' if axis == 0 else 'one column per bone'})",
+                )
+    return M
+
+
+def write_dmat(path: str | os.PathLike, M: np.ndarray) -> None:
+    """Write a dense matrix as ASCII ``.dmat`` (column-major), atomically."""
+    M = np.atleast_2d(np.asarray(M, np.float64))
+    body = "\n".join(f"{x:.17g}" for x in M.T.ravel())
+    write_text(path, f"{M.shape[1]} {M.shape[0]}\n{body}\n")
+
+
+# --------------------------------------------------------------------------- #
+# poses
+# --------------------------------------------------------------------------- #
+POSE_FORMAT = "supportless-pose"
+
+
+def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, joints: np.ndarray | None = None,
+               extra: dict | None = None) -> None:
+    """Write a pose (Euler angles per bone) as JSON, atomically.
+
+    Parameters
+    ----------
+    angles : (m, 3) float64
+        Radians, XYZ Euler angles per bone (see :mod:`supportless.kinematics`).
+    bones : (m, 2) int64
+        The skeleton the pose belongs to (0-based), stored so a pose is never
+        applied to another skeleton.
+    joints : (j, d) float64, optional
+        Stored for reference.
+    extra : dict, optional
+        More fields (e.g. the objective value).
+    """
+    angles = np.asarray(angles, np.float64)
+    data = {
+        "format": POSE_FORMAT,
+        "version": 1,
+        "euler": "XYZ, radians, about each bone's root joint, relative to the parent bone",
+        "bones": np.asarray(bones).tolist(),
+        "angles": angles.tolist(),
+        "angles_deg": np.degrees(angles).round(6).tolist(),
+    }
+    if joints is not None:
+        data["joints"] = np.asarray(joints).tolist()
+    if extra:
+        data.update(extra)
+    write_json(path, data)
+
+
+def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.ndarray:
+    """Read a pose written by :func:`write_pose`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    bones : (m, 2) int64, optional
+        The skeleton the pose must belong to.
+
+    Returns
+    -------
+    angles : (m, 3) float64
+        Radians.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        data = json.loads(path.read_text())
+        angles = np.asarray(data["angles"], dtype=np.float64)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(path, f"not a pose file (JSON with 'angles' and 'bones'): {_one_line(exc)}") from None
+    if angles.ndim != 2 or angles.shape[1] != 3 or not np.all(np.isfinite(angles)):
+        raise InputError(path, f"'angles' must be a list of [x, y, z] per bone, got shape {angles.shape}")
+    if bones is not None:
+        bones = np.asarray(bones)
+        stored = np.asarray(data.get("bones", []))
+        if len(angles) != len(bones) or (stored.size and (stored.shape != bones.shape or np.any(stored != bones))):
+            raise InputError(
+                path,
+                f"pose is for a skeleton with {len(angles)} bones, not this one with {len(bones)} bones; "
+                "use the skeleton the pose was made with",
+            )
+    return angles

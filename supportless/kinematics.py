@@ -1,0 +1,297 @@
+"""Euler angles -> forward kinematics -> bone transforms -> linear blend skinning.
+
+Conventions used across the project:
+
+* A skeleton is ``joints (j, d)`` and ``bones (m, 2)``: bone ``b`` goes from its
+  root joint ``bones[b, 0]`` to its tip ``bones[b, 1]``. Bone ``p`` is the
+  parent of ``b`` when ``p``'s tip is ``b``'s root. Bones may come in any order
+  and may form a forest.
+* A pose is one rotation per bone, relative to its parent, about the bone's root
+  joint, given as Euler angles ``(P, m, 3)`` in radians:
+  ``R = Rx(a0) @ Ry(a1) @ Rz(a2)``. In 2D only ``a2`` (about the plane normal)
+  is used.
+* A bone transform is an affine map ``x -> A x + b`` stored as a
+  ``(d, d+1)`` matrix ``[A | b]``. A batch is ``(P, m, d, d+1)``.
+* Linear blend skinning: ``v'_i = sum_j w_ij (A_j v_i + b_j)``, i.e.
+  ``V' = M T`` with :func:`lbs_matrix` and :func:`stack_transforms`.
+
+Forward kinematics composes rotations down the chain like libigl's
+``forward_kinematics``: ``Q_b = Q_parent(b) dQ_b`` and the joint of a child
+follows its parent's motion.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def bone_parents(bones: np.ndarray) -> np.ndarray:
+    """Parent of each bone: the bone whose tip is its root joint.
+
+    Parameters
+    ----------
+    bones : (m, 2) int64
+        ``[root joint, tip joint]`` per bone.
+
+    Returns
+    -------
+    parents : (m,) int64
+        Index of the parent bone, ``-1`` for a root bone.
+    """
+    bones = np.asarray(bones, dtype=np.int64)
+    parents = np.full(len(bones), -1, dtype=np.int64)
+    tip_owner = {}
+    for b, tip in enumerate(bones[:, 1]):
+        tip_owner.setdefault(int(tip), b)
+    for b, root in enumerate(bones[:, 0]):
+        parents[b] = tip_owner.get(int(root), -1)
+    return parents
+
+
+def topological_order(parents: np.ndarray) -> np.ndarray:
+    """Bones ordered so every parent comes before its children.
+
+    Parameters
+    ----------
+    parents : (m,) int64
+        From :func:`bone_parents`.
+
+    Returns
+    -------
+    order : (m,) int64
+
+    Raises
+    ------
+    ValueError
+        If the parent relation has a cycle.
+    """
+    m = len(parents)
+    depth = np.full(m, -1)
+    for b in range(m):
+        chain, p = [], b
+        while p >= 0 and depth[p] < 0:
+            chain.append(p)
+            if len(chain) > m:
+                raise ValueError("the bones form a cycle")
+            p = parents[p]
+        d = -1 if p < 0 else depth[p]
+        for q in reversed(chain):
+            d += 1
+            depth[q] = d
+    return np.argsort(depth, kind="stable")
+
+
+def descendants(parents: np.ndarray, bone: int) -> np.ndarray:
+    """The bone and every bone below it in the hierarchy.
+
+    Parameters
+    ----------
+    parents : (m,) int64
+    bone : int
+
+    Returns
+    -------
+    mask : (m,) bool
+    """
+    m = len(parents)
+    mask = np.zeros(m, bool)
+    mask[bone] = True
+    for b in topological_order(parents):
+        if parents[b] >= 0 and mask[parents[b]]:
+            mask[b] = True
+    return mask
+
+
+def euler_to_matrix(angles: np.ndarray) -> np.ndarray:
+    """Rotation matrices from XYZ Euler angles.
+
+    Parameters
+    ----------
+    angles : (..., 3) float64
+        Radians ``(a0, a1, a2)``.
+
+    Returns
+    -------
+    R : (..., 3, 3) float64
+        ``Rx(a0) @ Ry(a1) @ Rz(a2)``.
+    """
+    a = np.asarray(angles, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    cx, cy, cz = c[..., 0], c[..., 1], c[..., 2]
+    sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
+    R = np.empty(a.shape[:-1] + (3, 3))
+    R[..., 0, 0] = cy * cz
+    R[..., 0, 1] = -cy * sz
+    R[..., 0, 2] = sy
+    R[..., 1, 0] = sx * sy * cz + cx * sz
+    R[..., 1, 1] = -sx * sy * sz + cx * cz
+    R[..., 1, 2] = -sx * cy
+    R[..., 2, 0] = -cx * sy * cz + sx * sz
+    R[..., 2, 1] = cx * sy * sz + sx * cz
+    R[..., 2, 2] = cx * cy
+    return R
+
+
+def planar_rotation(theta: np.ndarray) -> np.ndarray:
+    """2D rotation matrices.
+
+    Parameters
+    ----------
+    theta : (...,) float64
+        Radians, counter-clockwise.
+
+    Returns
+    -------
+    R : (..., 2, 2) float64
+    """
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray,
+                       parents: np.ndarray | None = None, order: np.ndarray | None = None) -> np.ndarray:
+    """Bone transforms of a batch of poses.
+
+    Parameters
+    ----------
+    joints : (j, d) float64
+        Rest joint positions, d = 2 or 3.
+    bones : (m, 2) int64
+    angles : (P, m, 3) or (m, 3) float64
+        Relative XYZ Euler angles per bone, radians (2D uses ``[..., 2]`` only).
+    parents, order : (m,) int64, optional
+        From :func:`bone_parents` and :func:`topological_order`; computed when
+        not given.
+
+    Returns
+    -------
+    transforms : (P, m, d, d+1) or (m, d, d+1) float64
+        ``[A | b]`` per bone; zero angles give ``[I | 0]``.
+    """
+    joints = np.asarray(joints, dtype=np.float64)
+    bones = np.asarray(bones, dtype=np.int64)
+    angles = np.asarray(angles, dtype=np.float64)
+    single = angles.ndim == 2
+    if single:
+        angles = angles[None]
+    P, m = angles.shape[:2]
+    if m != len(bones):
+        raise ValueError(f"angles have {m} bones, the skeleton has {len(bones)}")
+    d = joints.shape[1]
+    if parents is None:
+        parents = bone_parents(bones)
+    if order is None:
+        order = topological_order(parents)
+    dQ = euler_to_matrix(angles) if d == 3 else planar_rotation(angles[..., 2])
+    Q = np.empty((P, m, d, d))
+    t = np.empty((P, m, d))
+    roots = joints[bones[:, 0]]  # (m, d)
+    for b in order:  # m iterations, each vectorised over poses
+        r = roots[b]
+        p = parents[b]
+        if p < 0:
+            Q[:, b] = dQ[:, b]
+            t[:, b] = r - dQ[:, b] @ r
+        else:
+            Q[:, b] = Q[:, p] @ dQ[:, b]
+            # the root joint moves with the parent, then the bone turns about it
+            t[:, b] = Q[:, p] @ r + t[:, p] - Q[:, b] @ r
+    out = np.concatenate([Q, t[..., None]], axis=-1)
+    return out[0] if single else out
+
+
+def transform_points(transforms: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply per-bone affine transforms to one point per bone.
+
+    Parameters
+    ----------
+    transforms : (..., m, d, d+1) float64
+    points : (m, d) float64
+
+    Returns
+    -------
+    out : (..., m, d) float64
+    """
+    A = transforms[..., :-1]
+    b = transforms[..., -1]
+    return np.einsum("...ij,...j->...i", A, points) + b
+
+
+def posed_joints(joints: np.ndarray, bones: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+    """Joint positions after posing.
+
+    Each bone's root and tip move with the bone; a joint shared by several bones
+    gets the first bone's position (they agree for joints connecting a parent's
+    tip to a child's root).
+
+    Parameters
+    ----------
+    joints : (j, d) float64
+    bones : (m, 2) int64
+    transforms : (P, m, d, d+1) or (m, d, d+1) float64
+
+    Returns
+    -------
+    joints : (P, j, d) or (j, d) float64
+    """
+    joints = np.asarray(joints, np.float64)
+    single = transforms.ndim == 3
+    T = transforms[None] if single else transforms
+    out = np.broadcast_to(joints, (T.shape[0],) + joints.shape).copy()
+    # tips first, then roots, so roots (which follow the parent) win for shared joints
+    out[:, bones[:, 1]] = transform_points(T, joints[bones[:, 1]])
+    out[:, bones[:, 0]] = transform_points(T, joints[bones[:, 0]])
+    return out[0] if single else out
+
+
+def lbs_matrix(vertices: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Linear blend skinning matrix ``M`` with ``V' = M T``.
+
+    Parameters
+    ----------
+    vertices : (n, d) float64
+        Rest positions.
+    weights : (n, m) float64
+        Skinning weights.
+
+    Returns
+    -------
+    M : (n, m*(d+1)) float64
+        ``M[i, j*(d+1) + c] = w_ij * [v_i, 1]_c``; pairs with
+        :func:`stack_transforms`.
+    """
+    V = np.asarray(vertices, np.float64)
+    W = np.asarray(weights, np.float64)
+    Vh = np.column_stack([V, np.ones(len(V))])
+    return (W[:, :, None] * Vh[:, None, :]).reshape(len(V), -1)
+
+
+def stack_transforms(transforms: np.ndarray) -> np.ndarray:
+    """Stack bone transforms into the ``T`` of ``V' = M T``.
+
+    Parameters
+    ----------
+    transforms : (..., m, d, d+1) float64
+
+    Returns
+    -------
+    T : (..., m*(d+1), d) float64
+    """
+    T = np.swapaxes(transforms, -1, -2)
+    return T.reshape(T.shape[:-3] + (-1, T.shape[-1]))
+
+
+def skin(M: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+    """Linear blend skinning of a batch of poses.
+
+    Parameters
+    ----------
+    M : (n, m*(d+1)) float64
+        From :func:`lbs_matrix`.
+    transforms : (P, m, d, d+1) or (m, d, d+1) float64
+
+    Returns
+    -------
+    vertices : (P, n, d) or (n, d) float64
+    """
+    return np.matmul(M, stack_transforms(transforms))

@@ -1,0 +1,476 @@
+"""The rig: rest surface, skeleton, volume mesh and skinning weights.
+
+:func:`prepare_rig` builds a :class:`Rig` from arrays: it meshes the inside of
+the surface with the bones sampled into it (TetGen, see
+:mod:`supportless.tetmesh`) and computes bounded biharmonic weights
+(``igl.boundary_conditions`` + ``igl.bbw``). :func:`load_rig` does the same from
+files and keeps the result in an on-disk cache keyed by a hash of the inputs
+and settings, so loading the same model again takes a fraction of a second.
+
+A planar figure (all z = 0, as the paper's 2D mode) becomes a 2D rig: arrays
+have ``d = 2`` columns and the "volume" mesh is the triangle mesh itself,
+refined so that vertices lie on the bones.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import time
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from . import kinematics as kin
+from .errors import InputError
+from .io import atomic_path, check_closed_surface, parse_up, read_dmat, read_mesh, read_tet_mesh, read_tgf
+
+#: Bump when the cached content or the way it is computed changes.
+CACHE_VERSION = 1
+
+#: Default settings of the weight computation.
+SAMPLES_PER_BONE = 10
+BBW_ITERATIONS = 10
+
+
+@dataclass(eq=False)
+class Rig:
+    """A prepared model: everything needed to pose it and measure its energies.
+
+    Attributes
+    ----------
+    vertices : (n, d) float64
+        Full-resolution rest surface (d = 3), or the planar mesh (d = 2).
+    faces : (f, 3) int64
+        Surface triangles, outward oriented (counter-clockwise in 2D).
+    joints : (j, d) float64
+    bones : (m, 2) int64
+        0-based ``[root, tip]`` joint indices, in TGF order.
+    tet_vertices : (t, d) float64
+        Volume mesh vertices; the first ``n`` rows are ``vertices``.
+    tets : (k, d+1) int64
+        Tetrahedra (triangles in 2D).
+    tet_weights : (t, m) float64
+        Bounded biharmonic weights on the volume mesh, rows sum to 1.
+    up : (d,) float64
+        Unit printing direction.
+    name : str
+        For reports and pictures.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    joints: np.ndarray
+    bones: np.ndarray
+    tet_vertices: np.ndarray
+    tets: np.ndarray
+    tet_weights: np.ndarray
+    up: np.ndarray
+    name: str = "model"
+    info: dict = field(default_factory=dict)
+
+    # ----------------------------------------------------------------- basics
+    @property
+    def dim(self) -> int:
+        """2 for a planar figure, 3 otherwise."""
+        return self.vertices.shape[1]
+
+    @property
+    def weights(self) -> np.ndarray:
+        """(n, m) float64: skinning weights of the surface vertices."""
+        return self.tet_weights[: len(self.vertices)]
+
+    @cached_property
+    def parents(self) -> np.ndarray:
+        """(m,) int64: parent bone of each bone, -1 for roots."""
+        return kin.bone_parents(self.bones)
+
+    @cached_property
+    def order(self) -> np.ndarray:
+        """(m,) int64: bones with parents before children."""
+        return kin.topological_order(self.parents)
+
+    @cached_property
+    def lbs(self) -> np.ndarray:
+        """(n, m*(d+1)) float64: skinning matrix of the surface, ``V' = M T``."""
+        return kin.lbs_matrix(self.vertices, self.weights)
+
+    @property
+    def bone_count(self) -> int:
+        return len(self.bones)
+
+    def bone_names(self) -> list[str]:
+        """Names for the bones, ``"bone 3 (4-5)"``, 1-based as in the TGF file."""
+        return [f"bone {i + 1} ({a + 1}-{b + 1})" for i, (a, b) in enumerate(self.bones)]
+
+    # ----------------------------------------------------------------- posing
+    def transforms(self, angles: np.ndarray) -> np.ndarray:
+        """Bone transforms for a batch of poses.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+            Relative XYZ Euler angles per bone, radians.
+
+        Returns
+        -------
+        transforms : (P, m, d, d+1) or (m, d, d+1) float64
+        """
+        return kin.forward_kinematics(self.joints, self.bones, angles, self.parents, self.order)
+
+    def pose(self, angles: np.ndarray) -> np.ndarray:
+        """Posed surface vertices for a batch of poses.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+            Relative XYZ Euler angles per bone, radians.
+
+        Returns
+        -------
+        vertices : (P, n, d) or (n, d) float64
+        """
+        return kin.skin(self.lbs, self.transforms(angles))
+
+    def posed_joints(self, angles: np.ndarray) -> np.ndarray:
+        """Joint positions of a batch of poses, (P, j, d) or (j, d) float64."""
+        return kin.posed_joints(self.joints, self.bones, self.transforms(angles))
+
+    def rest_angles(self) -> np.ndarray:
+        """(m, 3) float64 zeros: the rest pose."""
+        return np.zeros((self.bone_count, 3))
+
+    def __repr__(self) -> str:
+        return (f"Rig({self.name!r}: {len(self.vertices)} vertices, {len(self.faces)} faces, "
+                f"{len(self.tets)} {'tets' if self.dim == 3 else 'triangles'}, {self.bone_count} bones, "
+                f"{self.dim}D)")
+
+
+# --------------------------------------------------------------------------- #
+# validation
+# --------------------------------------------------------------------------- #
+def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
+    return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
+
+
+def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    """Enclosed volume of a closed surface (area of a planar mesh in 2D).
+
+    Parameters
+    ----------
+    V : (n, 3) or (n, 2) float64
+    F : (f, 3) int64
+
+    Returns
+    -------
+    volume : float
+        Positive for an outward-oriented surface (counter-clockwise in 2D).
+    """
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    if V.shape[1] == 2:
+        return float(0.5 * np.sum((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def _check_inputs(V, F, joints, bones, mesh_path=None, skel_path=None):
+    """Validate and normalise arrays; returns (V, F, joints, dim)."""
+    if len(bones) == 0:
+        raise InputError(skel_path, "skeleton has no bones")
+    if bones.min() < 0 or bones.max() >= len(joints):
+        raise InputError(skel_path, f"a bone refers to a joint out of range 0..{len(joints) - 1}")
+    if F.min() < 0 or F.max() >= len(V):
+        raise InputError(mesh_path, "a face refers to a vertex out of range")
+    if joints.shape[1] != V.shape[1] and not (V.shape[1] == 2 and joints.shape[1] == 3):
+        raise InputError(skel_path, f"skeleton is {joints.shape[1]}D but the mesh is {V.shape[1]}D")
+    if _is_planar(V, joints):
+        V2, J2 = V[:, :2], joints[:, :2]
+        if signed_volume(V2, F) < 0:
+            F = F[:, ::-1].copy()
+        inside = _inside_planar(V2, F, J2)
+        if not inside.all():
+            i = int(np.flatnonzero(~inside)[0])
+            raise InputError(skel_path, f"joint {i + 1} at {J2[i].tolist()} lies outside the planar mesh "
+                             f"{mesh_path or ''}".rstrip() + "; move it inside")
+        return np.ascontiguousarray(V2), F, np.ascontiguousarray(J2), 2
+    check_closed_surface(V, F, mesh_path)
+    if signed_volume(V, F) < 0:
+        F = F[:, ::-1].copy()
+    import igl
+
+    wn = np.asarray(igl.winding_number(V, F, joints))
+    outside = np.flatnonzero(np.abs(wn) < 0.5)
+    if len(outside):
+        i = int(outside[0])
+        raise InputError(skel_path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies outside the surface"
+                         f"{' ' + str(mesh_path) if mesh_path else ''} ({len(outside)} joints outside); "
+                         "check the skeleton belongs to this model and uses the same units")
+    return V, F, joints, 3
+
+
+def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    inside = np.zeros(len(Q), bool)
+    for k, q in enumerate(Q):
+        def side(u, v):
+            return (v - u)[:, 0] * (q - u)[:, 1] - (v - u)[:, 1] * (q - u)[:, 0]
+        s0, s1, s2 = side(a, b), side(b, c), side(c, a)
+        inside[k] = np.any((s0 >= -1e-12) & (s1 >= -1e-12) & (s2 >= -1e-12))
+    return inside
+
+
+# --------------------------------------------------------------------------- #
+# preparation
+# --------------------------------------------------------------------------- #
+def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarray, bones: np.ndarray,
+                    iterations: int = BBW_ITERATIONS) -> np.ndarray:
+    """Bounded biharmonic weights of a volume mesh, fixed to 1 on each bone.
+
+    Parameters
+    ----------
+    tet_vertices : (t, d) float64
+        Must have vertices exactly on the bones (see :mod:`supportless.tetmesh`).
+    tets : (k, d+1) int64
+    joints : (j, d) float64
+    bones : (m, 2) int64
+    iterations : int
+        Active-set iterations of ``igl.bbw``.
+
+    Returns
+    -------
+    weights : (t, m) float64
+        In [0, 1], rows summing to 1.
+    """
+    import igl
+
+    TV = np.ascontiguousarray(tet_vertices, np.float64)
+    TT = np.ascontiguousarray(tets, np.int64)
+    C = np.ascontiguousarray(joints, np.float64)
+    BE = np.ascontiguousarray(bones, np.int64)
+    try:
+        b, bc = igl.boundary_conditions(TV, TT, C, np.zeros(0, np.int64), BE, np.zeros((0, 2), np.int64),
+                                        np.zeros((0, 3), np.int64))
+    except Exception as exc:
+        raise InputError(None, f"cannot fix weights on the bones ({exc})") from None
+    if len(bones) == 1:
+        return np.ones((len(TV), 1))
+    W = np.asarray(igl.bbw(TV, TT, np.asarray(b, np.int64), np.asarray(bc, np.float64),
+                           partition_unity=True, max_iter=iterations), np.float64)
+    W = np.clip(W, 0.0, 1.0)
+    s = W.sum(1, keepdims=True)
+    bad = s[:, 0] <= 1e-12
+    if np.any(bad):  # vertex with no influence at all: give it to the nearest bone sample
+        W[bad] = 1.0 / W.shape[1]
+        s = W.sum(1, keepdims=True)
+    return W / s
+
+
+def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples_per_bone=SAMPLES_PER_BONE,
+                bbw_iterations=BBW_ITERATIONS, tet_mesh=None, tet_weights=None, mesh_path=None,
+                skeleton_path=None, progress=None) -> Rig:
+    """Build a rig from arrays: volume mesh and bounded biharmonic weights.
+
+    Parameters
+    ----------
+    vertices : (n, 3) or (n, 2) float64
+        Closed surface, or a planar triangle mesh (z = 0 or two columns).
+    faces : (f, 3) int64
+    joints : (j, 3) or (j, 2) float64
+    bones : (m, 2) int64
+        0-based.
+    up : str or (d,) float
+        Printing direction, see :func:`supportless.io.parse_up`.
+    name : str
+    samples_per_bone : int
+        Volume-mesh vertices inserted along each bone.
+    bbw_iterations : int
+        Active-set iterations of the weight solve.
+    tet_mesh : ((t, 3) float64, (k, 4) int64), optional
+        A precomputed volume mesh whose vertices include the surface's.
+    tet_weights : (t, m) float64, optional
+        Precomputed weights of ``tet_mesh``'s vertices (requires ``tet_mesh``).
+    mesh_path, skeleton_path : str, optional
+        Named in error messages.
+    progress : callable(str), optional
+        Told about each stage.
+
+    Returns
+    -------
+    rig : Rig
+    """
+    from .tetmesh import bone_samples, refine_triangulation_with_points, tetrahedralize_with_skeleton
+
+    say = progress or (lambda msg: None)
+    V = np.asarray(vertices, np.float64)
+    F = np.asarray(faces, np.int64)
+    J = np.asarray(joints, np.float64)
+    B = np.asarray(bones, np.int64)
+    V, F, J, dim = _check_inputs(V, F, J, B, mesh_path, skeleton_path)
+    up_vec = parse_up(up, dim)
+    t0 = time.perf_counter()
+    if tet_mesh is not None:
+        TV, TT = (np.asarray(a) for a in tet_mesh)
+        TV, TT, tet_order = _attach_surface(V, TV.astype(np.float64), TT.astype(np.int64), mesh_path)
+    elif dim == 3:
+        say("tetrahedralising")
+        TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone)
+    else:
+        say("refining the planar mesh along the bones")
+        TV, TT = refine_triangulation_with_points(V, F, bone_samples(J, B, samples_per_bone))
+    t1 = time.perf_counter()
+    if tet_weights is not None:
+        if tet_mesh is None:
+            raise InputError(None, "precomputed weights need the tet mesh they were computed on (--tets)")
+        W = np.asarray(tet_weights, np.float64)
+        if W.shape != (len(TV), len(B)):
+            raise InputError(None, f"weights are {W.shape[0]}x{W.shape[1]} but the tet mesh has {len(TV)} "
+                             f"vertices and the skeleton {len(B)} bones")
+        W = W[tet_order]
+    else:
+        say("computing bounded biharmonic weights")
+        W = compute_weights(TV, TT, J, B, bbw_iterations)
+    t2 = time.perf_counter()
+    info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
+            "bbw_iterations": bbw_iterations}
+    return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info)
+
+
+def _attach_surface(V, TV, TT, path):
+    """Reorder a given volume mesh so its first rows are the surface vertices.
+
+    Returns the reordered vertices (t, 3), the re-indexed tets (k, 4) and the
+    order (t,) int64 (new row i is old row ``order[i]``).
+    """
+    from scipy.spatial import cKDTree
+
+    dist, idx = cKDTree(TV).query(V)
+    scale = float(np.ptp(V, axis=0).max())
+    if np.max(dist) > 1e-7 * scale:
+        raise InputError(path, "the tet mesh does not contain the surface's vertices; "
+                         "give the tet mesh made from this surface")
+    rest = np.setdiff1d(np.arange(len(TV)), idx)
+    order = np.concatenate([idx, rest])
+    inverse = np.empty_like(order)
+    inverse[order] = np.arange(len(order))
+    return TV[order], inverse[TT], order
+
+
+# --------------------------------------------------------------------------- #
+# loading with a cache
+# --------------------------------------------------------------------------- #
+def default_cache_dir() -> Path:
+    """The rig cache folder: ``$SUPPORTLESS_CACHE``, else ``$XDG_CACHE_HOME/supportless``, else ``~/.cache/supportless``."""
+    env = os.environ.get("SUPPORTLESS_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "supportless"
+
+
+def rig_cache_key(V, F, J, B, up, **settings) -> str:
+    """Hash of everything a prepared rig depends on (hex string)."""
+    h = hashlib.sha256()
+    h.update(f"supportless-rig-v{CACHE_VERSION}".encode())
+    for a in (V, F, J, B, up):
+        a = np.ascontiguousarray(a)
+        h.update(str(a.dtype).encode() + str(a.shape).encode())
+        h.update(a.tobytes())
+    h.update(repr(sorted(settings.items())).encode())
+    return h.hexdigest()[:24]
+
+
+def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None, tets=None, weights=None,
+             samples_per_bone: int = SAMPLES_PER_BONE, bbw_iterations: int = BBW_ITERATIONS,
+             progress=None) -> Rig:
+    """Read a model and its skeleton and prepare (or load from the cache) its rig.
+
+    Parameters
+    ----------
+    model : str or os.PathLike
+        Surface mesh file (OBJ, STL, PLY, OFF, 3MF, GLB), or ``"demo:NAME"`` for a
+        built-in figure (then ``skeleton`` is not needed).
+    skeleton : str or os.PathLike
+        TGF skeleton. Defaults to the model's path with ``.tgf``.
+    up : str or sequence of float
+        Printing direction.
+    cache : bool
+        Use the on-disk cache.
+    cache_dir : str or os.PathLike, optional
+        Defaults to :func:`default_cache_dir`.
+    tets : str or os.PathLike, optional
+        Precomputed libigl ``.mesh`` volume mesh.
+    weights : str or os.PathLike, optional
+        Precomputed ``.dmat`` weights on the ``tets`` vertices (t rows, m columns).
+    samples_per_bone, bbw_iterations : int
+        See :func:`prepare_rig`.
+    progress : callable(str), optional
+
+    Returns
+    -------
+    rig : Rig
+    """
+    if isinstance(model, str) and model.startswith("demo:"):
+        from .shapes import demo_figure
+
+        figure = model.split(":", 1)[1]
+        V, F, J, B = demo_figure(figure)
+        name, mesh_path, skel_path = figure, None, None
+    else:
+        mesh_path = Path(model)
+        skel_path = Path(skeleton) if skeleton is not None else mesh_path.with_suffix(".tgf")
+        V, F = read_mesh(mesh_path)
+        J, B = read_tgf(skel_path)
+        name = mesh_path.stem
+    settings = dict(samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations)
+    tet_arrays = read_tet_mesh(tets) if tets is not None else None
+    W = None
+    if weights is not None:
+        if tet_arrays is None:
+            raise InputError(weights, "precomputed weights need the tet mesh they were computed on (--tets)")
+        W = read_dmat(weights, (len(tet_arrays[0]), len(B)))
+    if tet_arrays is not None:
+        settings["tets"] = hashlib.sha256(np.ascontiguousarray(tet_arrays[1]).tobytes()).hexdigest()
+    if W is not None:
+        settings["weights"] = hashlib.sha256(W.tobytes()).hexdigest()
+    up_key = np.asarray(parse_up(up), np.float64)
+    key = rig_cache_key(V, F, J, B, up_key, **settings)
+    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
+    file = folder / f"rig-{key}.npz"
+    if cache and file.is_file():
+        try:
+            rig = _read_cached(file, name)
+            rig.info["cache"] = str(file)
+            rig.info["from_cache"] = True
+            return rig
+        except Exception:  # a damaged cache entry is recomputed, never fatal
+            pass
+    rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
+                      tet_mesh=tet_arrays, tet_weights=W, mesh_path=mesh_path, skeleton_path=skel_path,
+                      progress=progress)
+    rig.info["from_cache"] = False
+    if cache:
+        try:
+            _write_cached(file, rig)
+            rig.info["cache"] = str(file)
+        except OSError:
+            rig.info["cache"] = None
+    return rig
+
+
+_ARRAYS = ("vertices", "faces", "joints", "bones", "tet_vertices", "tets", "tet_weights", "up")
+
+
+def _write_cached(file: Path, rig: Rig) -> None:
+    file.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(file) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, version=CACHE_VERSION, **{k: getattr(rig, k) for k in _ARRAYS})
+
+
+def _read_cached(file: Path, name: str) -> Rig:
+    with np.load(file) as data:
+        if int(data["version"]) != CACHE_VERSION:
+            raise ValueError("old cache version")
+        arrays = {k: data[k] for k in _ARRAYS}
+    return Rig(**arrays, name=name, info={})
