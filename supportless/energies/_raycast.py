@@ -146,13 +146,47 @@ def orientation_sign(V, F):
         +1 when the faces are outward oriented (counter-clockwise in 2D),
         -1 when inverted; +1 when the total is exactly zero.
     """
-    a, b, c = V[:, F[:, 0]], V[:, F[:, 1]], V[:, F[:, 2]]
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
     if V.shape[-1] == 3:
-        tot = np.einsum("pfi,pfi->p", a, np.cross(b, c))
+        tot = _signed_volume3(V, F)
     else:
-        e1, e2 = b - a, c - a
-        tot = (e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]).sum(axis=1)
+        tot = _signed_area2(V, F)
     return np.where(tot < 0.0, -1.0, 1.0)
+
+
+@njit(cache=True, parallel=True)
+def _signed_volume3(V, F):
+    P = V.shape[0]
+    out = np.zeros(P, np.float64)
+    for p in prange(P):
+        X = V[p]
+        t = 0.0
+        for f in range(F.shape[0]):
+            a = F[f, 0]
+            b = F[f, 1]
+            c = F[f, 2]
+            t += X[a, 0] * (X[b, 1] * X[c, 2] - X[b, 2] * X[c, 1])
+            t += X[a, 1] * (X[b, 2] * X[c, 0] - X[b, 0] * X[c, 2])
+            t += X[a, 2] * (X[b, 0] * X[c, 1] - X[b, 1] * X[c, 0])
+        out[p] = t / 6.0
+    return out
+
+
+@njit(cache=True, parallel=True)
+def _signed_area2(V, F):
+    P = V.shape[0]
+    out = np.zeros(P, np.float64)
+    for p in prange(P):
+        X = V[p]
+        t = 0.0
+        for f in range(F.shape[0]):
+            a = F[f, 0]
+            b = F[f, 1]
+            c = F[f, 2]
+            t += (X[b, 0] - X[a, 0]) * (X[c, 1] - X[a, 1]) - (X[b, 1] - X[a, 1]) * (X[c, 0] - X[a, 0])
+        out[p] = 0.5 * t
+    return out
 
 
 def boundary_edges(faces, vertices=None):
@@ -197,26 +231,34 @@ def boundary_edges(faces, vertices=None):
 
 
 @njit(cache=True, inline="always")
-def _side(ax, ay, bx, by, px, py):
-    """Sign (+1 left, -1 right) of p w.r.t. directed edge a->b, never 0
-    unless the edge is degenerate (symbolic perturbation p + (eps, eps^2))."""
+def _edge(ax, ay, bx, by):
+    """Canonical form of the directed edge a->b.
+
+    Returns ``(ox, oy, dx, dy, flip, tie)``: the edge function of a point p
+    is ``flip * (dx * (py - oy) - dy * (px - ox))`` (positive on the left of
+    a->b), with the end points taken in lexicographic order so that both
+    triangles sharing an edge evaluate bit-identical values; ``tie`` is the
+    sign used when that value is exactly 0 (perturbation p + (eps, eps^2)).
+    """
     flip = 1.0
     if bx < ax or (bx == ax and by < ay):
         ax, ay, bx, by = bx, by, ax, ay
         flip = -1.0
     dx = bx - ax
     dy = by - ay
-    e = dx * (py - ay) - dy * (px - ax)
+    if dy != 0.0:
+        tie = -dy
+    else:
+        tie = dx
+    return ax, ay, dx, dy, flip, tie
+
+
+@njit(cache=True, inline="always")
+def _inside(ox, oy, dx, dy, flip, tie, px, py):
+    e = dx * (py - oy) - dy * (px - ox)
     if e == 0.0:
-        if dy != 0.0:
-            e = -dy
-        else:
-            e = dx
-    if e > 0.0:
-        return flip
-    elif e < 0.0:
-        return -flip
-    return 0.0
+        e = tie
+    return e * flip > 0.0
 
 
 @njit(cache=True)
@@ -358,15 +400,24 @@ def _pose3(X, F, orient, R, tau):
         i_hi = min(nx - 1, int(np.ceil((hi_u - u0) / cell - 0.5)))
         j_lo = max(0, int(np.floor((lo_w - w0) / cell - 0.5)))
         j_hi = min(ny - 1, int(np.ceil((hi_w - w0) / cell - 0.5)))
+        # orient the three edges so that the inside is on the left
+        if s > 0.0:
+            o1x, o1y, d1x, d1y, f1, t1 = _edge(ax, ay, bx, by)
+            o2x, o2y, d2x, d2y, f2, t2 = _edge(bx, by, cx, cy)
+            o3x, o3y, d3x, d3y, f3, t3 = _edge(cx, cy, ax, ay)
+        else:
+            o1x, o1y, d1x, d1y, f1, t1 = _edge(bx, by, ax, ay)
+            o2x, o2y, d2x, d2y, f2, t2 = _edge(cx, cy, bx, by)
+            o3x, o3y, d3x, d3y, f3, t3 = _edge(ax, ay, cx, cy)
         for j in range(j_lo, j_hi + 1):
             py = w0 + (j + 0.5) * cell
             for i in range(i_lo, i_hi + 1):
                 px = u0 + (i + 0.5) * cell
-                if _side(ax, ay, bx, by, px, py) * s <= 0.0:
+                if not _inside(o1x, o1y, d1x, d1y, f1, t1, px, py):
                     continue
-                if _side(bx, by, cx, cy, px, py) * s <= 0.0:
+                if not _inside(o2x, o2y, d2x, d2y, f2, t2, px, py):
                     continue
-                if _side(cx, cy, ax, ay, px, py) * s <= 0.0:
+                if not _inside(o3x, o3y, d3x, d3y, f3, t3, px, py):
                     continue
                 if m == pix.shape[0]:
                     pix, zz, cc = _grow(pix, zz, cc)

@@ -22,56 +22,108 @@ or signed area (2D) of each pose, so either consistent winding works.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 from ._raycast import boundary_edges, orientation_sign, prepare
 
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "boundary_edges"]
 
 
-def _tau(overhang_angle):
-    return float(np.cos(np.deg2rad(float(overhang_angle))))
+@njit(cache=True, parallel=True)
+def _kernel3(V, F, up, orient, tau, mask):
+    """Energy and risky area per pose (3D); fills ``mask`` (P, f)."""
+    P = V.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    ux, uy, uz = up[0], up[1], up[2]
+    for p in prange(P):
+        X = V[p]
+        plate = np.inf
+        for i in range(X.shape[0]):
+            plate = min(plate, X[i, 0] * ux + X[i, 1] * uy + X[i, 2] * uz)
+        e = 0.0
+        ra = 0.0
+        for f in range(F.shape[0]):
+            a = F[f, 0]
+            b = F[f, 1]
+            c = F[f, 2]
+            e1x = X[b, 0] - X[a, 0]
+            e1y = X[b, 1] - X[a, 1]
+            e1z = X[b, 2] - X[a, 2]
+            e2x = X[c, 0] - X[a, 0]
+            e2y = X[c, 1] - X[a, 1]
+            e2z = X[c, 2] - X[a, 2]
+            nx = e1y * e2z - e1z * e2y
+            ny = e1z * e2x - e1x * e2z
+            nz = e1x * e2y - e1y * e2x
+            dbl = np.sqrt(nx * nx + ny * ny + nz * nz)
+            risky = False
+            if dbl > 0.0:
+                proj = orient[p] * (nx * ux + ny * uy + nz * uz)
+                if proj < -tau * dbl:
+                    risky = True
+                    h = ((X[a, 0] + X[b, 0] + X[c, 0]) * ux
+                         + (X[a, 1] + X[b, 1] + X[c, 1]) * uy
+                         + (X[a, 2] + X[b, 2] + X[c, 2]) * uz) / 3.0 - plate
+                    # A |n.d| h = |cross . d| / 2 * h
+                    e += -0.5 * proj * h
+                    ra += 0.5 * dbl
+            mask[p, f] = risky
+        out[p, 0] = e
+        out[p, 1] = ra
+    return out
 
 
-def _elements(vertices, faces, up):
-    """Per-element measure, normal component along up and centroid height.
+@njit(cache=True, parallel=True)
+def _kernel2(V, E, up, orient, tau, mask):
+    """Energy and risky length per pose (2D boundary edges); fills ``mask``."""
+    P = V.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    ux, uy = up[0], up[1]
+    for p in prange(P):
+        X = V[p]
+        plate = np.inf
+        for i in range(X.shape[0]):
+            plate = min(plate, X[i, 0] * ux + X[i, 1] * uy)
+        e = 0.0
+        rl = 0.0
+        for k in range(E.shape[0]):
+            a = E[k, 0]
+            b = E[k, 1]
+            tx = X[b, 0] - X[a, 0]
+            ty = X[b, 1] - X[a, 1]
+            ln = np.sqrt(tx * tx + ty * ty)
+            risky = False
+            if ln > 0.0:
+                # outward normal of a counter-clockwise boundary: (ty, -tx)
+                proj = orient[p] * (ty * ux - tx * uy)
+                if proj < -tau * ln:
+                    risky = True
+                    h = 0.5 * ((X[a, 0] + X[b, 0]) * ux + (X[a, 1] + X[b, 1]) * uy) - plate
+                    e += -proj * h
+                    rl += ln
+            mask[p, k] = risky
+        out[p, 0] = e
+        out[p, 1] = rl
+    return out
 
-    Returns
-    -------
-    meas : (P, m) float64
-        Area (3D faces) or length (2D boundary edges).
-    ndot : (P, m) float64
-        ``n . up`` of the outward unit normal (0 for degenerate elements).
-    h : (P, m) float64
-        Centroid height above the build plate.
-    single : bool
-    """
+
+def _compute(vertices, faces, up, overhang_angle):
+    """Run the kernel: returns ((P, 2) [energy, risky measure], mask, single)."""
     V, F, u, single = prepare(vertices, faces, up)
-    orient = orientation_sign(V, F)[:, None]
-    height = V @ u  # (P, n)
-    plate = height.min(axis=1, keepdims=True)
+    tau = float(np.cos(np.deg2rad(float(overhang_angle))))
+    orient = orientation_sign(V, F)
     if V.shape[-1] == 3:
-        a, b, c = V[:, F[:, 0]], V[:, F[:, 1]], V[:, F[:, 2]]
-        cr = np.cross(b - a, c - a)
-        dbl = np.linalg.norm(cr, axis=-1)
-        meas = 0.5 * dbl
-        h = (height[:, F[:, 0]] + height[:, F[:, 1]] + height[:, F[:, 2]]) / 3.0 - plate
+        mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
+        out = _kernel3(V, F, u, orient, tau, mask)
     else:
         E = boundary_edges(F)
-        a, b = V[:, E[:, 0]], V[:, E[:, 1]]
-        t = b - a
-        # outward normal of a counter-clockwise boundary: (dy, -dx)
-        cr = np.stack([t[..., 1], -t[..., 0]], axis=-1)
-        dbl = np.linalg.norm(cr, axis=-1)
-        meas = dbl
-        h = 0.5 * (height[:, E[:, 0]] + height[:, E[:, 1]]) - plate
-    proj = cr @ u
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ndot = np.where(dbl > 0.0, orient * proj / np.where(dbl > 0.0, dbl, 1.0), 0.0)
-    return meas, ndot, h, single
+        mask = np.zeros((V.shape[0], E.shape[0]), np.bool_)
+        out = _kernel2(V, E, u, orient, tau, mask)
+    return out, mask, single
 
 
 def _out(x, single):
-    return float(x[0]) if single else x
+    return float(x[0]) if single else np.ascontiguousarray(x)
 
 
 def risky_faces(vertices, faces, up, overhang_angle=45.0):
@@ -96,8 +148,7 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0):
         ``m = f`` in 3D; in 2D ``m`` is the number of boundary edges, in the
         order of :func:`boundary_edges` ``(faces)``.
     """
-    _, ndot, _, single = _elements(vertices, faces, up)
-    mask = ndot < -_tau(overhang_angle)
+    _, mask, single = _compute(vertices, faces, up, overhang_angle)
     return mask[0] if single else mask
 
 
@@ -120,9 +171,8 @@ def risky_area(vertices, faces, up, overhang_angle=45.0):
     area : (P,) float64 or float
         Sum of the areas (lengths) of risky elements per pose.
     """
-    meas, ndot, _, single = _elements(vertices, faces, up)
-    res = np.where(ndot < -_tau(overhang_angle), meas, 0.0).sum(axis=1)
-    return _out(res, single)
+    out, _, single = _compute(vertices, faces, up, overhang_angle)
+    return _out(out[:, 1], single)
 
 
 def overhang_energy(vertices, faces, up, overhang_angle=45.0):
@@ -149,7 +199,5 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0):
         (``s**2`` in 2D) under uniform scaling and is invariant under
         rotations about ``up`` and translations.
     """
-    meas, ndot, h, single = _elements(vertices, faces, up)
-    lam = meas * np.abs(ndot) * h
-    res = np.where(ndot < -_tau(overhang_angle), lam, 0.0).sum(axis=1)
-    return _out(res, single)
+    out, _, single = _compute(vertices, faces, up, overhang_angle)
+    return _out(out[:, 0], single)
