@@ -1,0 +1,165 @@
+"""What the pose search minimises: a weighted, normalised sum of three energies.
+
+``E = w_arap * E_arap / vol + w_overhang * E_overhang / S_rest + w_intersect * E_intersect / vol``
+
+* ``vol`` is the rest volume of the model (area in 2D). ``E_arap`` and
+  ``E_intersect`` scale like a volume (s³ in 3D, s² in 2D), so dividing by
+  ``vol`` makes them dimensionless: the ARAP term becomes a mean squared strain,
+  the intersection term the fraction of the body that overlaps itself.
+* ``S_rest`` is the overhang (support) estimate of the rest pose, floored at
+  ``1e-3 * vol`` so an already printable model does not divide by zero. The
+  overhang term is then 1.0 at the rest pose and 0.6 for a pose needing 40 %
+  less support.
+
+All three normalised terms are invariant to the model's scale and units, so the
+same default weights work for a 6 cm and a 6 m model and for planar figures.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from .energies import arap as arap_mod
+from .energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
+from .energies.overhang import overhang_energy
+from .energies.support import support_volume
+from .rig import Rig, signed_volume
+
+#: Default weights of the normalised terms (see the module docstring).
+W_ARAP = 2.0
+W_OVERHANG = 1.0
+W_INTERSECT = 50.0
+
+OVERHANG_MODELS = ("prism", "column")
+
+
+class Objective:
+    """Weighted sum of the normalised ARAP, overhang and self-intersection energies.
+
+    Parameters
+    ----------
+    rig : Rig
+    w_arap, w_overhang, w_intersect : float
+        Weights of the normalised terms.
+    overhang_angle : float
+        Threshold slope in degrees from the build plate (45 = the usual slicer
+        default).
+    overhang_model : {"prism", "column"}
+        ``prism``: the paper's per-face prism estimate. ``column``: support
+        columns cast down to the plate or the body below
+        (:func:`supportless.energies.support.support_volume`).
+    clusters : int or None
+        Rotation clusters of the reduced ARAP energy (None = one per element).
+    resolution : int
+        Ray-grid resolution of the intersection (and column) estimate.
+    """
+
+    def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
+                 w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
+                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION):
+        if overhang_model not in OVERHANG_MODELS:
+            raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
+        self.rig = rig
+        self.w_arap = float(w_arap)
+        self.w_overhang = float(w_overhang)
+        self.w_intersect = float(w_intersect)
+        self.overhang_angle = float(overhang_angle)
+        self.overhang_model = overhang_model
+        self.clusters = clusters
+        self.resolution = int(resolution)
+
+    # ------------------------------------------------------------ precompute
+    @cached_property
+    def arap_data(self) -> arap_mod.ArapData:
+        """Reduced ARAP operators of the rig (computed once)."""
+        return arap_mod.arap_precompute(self.rig.tet_vertices, self.rig.tets, self.rig.tet_weights,
+                                        clusters=self.clusters, rng=np.random.default_rng(0))
+
+    @cached_property
+    def volume(self) -> float:
+        """Rest volume of the model (area in 2D)."""
+        return abs(signed_volume(self.rig.vertices, self.rig.faces))
+
+    @cached_property
+    def rest_overhang(self) -> float:
+        """Overhang estimate of the rest pose (the chosen model)."""
+        return float(self.overhang(self.rig.vertices))
+
+    @cached_property
+    def overhang_scale(self) -> float:
+        """Denominator of the overhang term: the rest value, floored at 1e-3 of the volume."""
+        return max(self.rest_overhang, 1e-3 * self.volume)
+
+    # --------------------------------------------------------------- energies
+    def overhang(self, vertices: np.ndarray) -> np.ndarray:
+        """Raw overhang estimate of posed vertices, (P,) or float."""
+        if self.overhang_model == "column":
+            return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution)
+        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle)
+
+    def raw_terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
+        """The three energies before normalisation.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+
+        Returns
+        -------
+        terms : dict of str -> (P,) float64 (floats for a single pose)
+            ``arap`` (volume units), ``overhang`` and ``intersection`` (volumes).
+        """
+        transforms = self.rig.transforms(angles)
+        from .kinematics import skin
+
+        V = skin(self.rig.lbs, transforms)
+        return {
+            "arap": arap_mod.arap_energy(self.arap_data, transforms),
+            "overhang": self.overhang(V),
+            "intersection": self_intersection_volume(V, self.rig.faces, self.rig.up, self.resolution),
+        }
+
+    def normalise(self, raw: dict) -> dict:
+        """Raw terms -> normalised terms (see the module docstring)."""
+        return {
+            "arap": np.asarray(raw["arap"]) / self.volume,
+            "overhang": np.asarray(raw["overhang"]) / self.overhang_scale,
+            "intersection": np.asarray(raw["intersection"]) / self.volume,
+        }
+
+    def combine(self, terms: dict) -> np.ndarray:
+        """Weighted sum of normalised terms."""
+        return (self.w_arap * terms["arap"] + self.w_overhang * terms["overhang"]
+                + self.w_intersect * terms["intersection"])
+
+    def terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
+        """Normalised terms of a batch of poses.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+
+        Returns
+        -------
+        terms : dict with keys ``arap``, ``overhang``, ``intersection``
+            (P,) float64 arrays (0-d arrays for a single pose).
+        """
+        return self.normalise(self.raw_terms(angles))
+
+    def evaluate(self, angles: np.ndarray) -> tuple[np.ndarray, dict, dict]:
+        """Objective, normalised terms and raw terms in one pass."""
+        raw = self.raw_terms(angles)
+        terms = self.normalise(raw)
+        return self.combine(terms), terms, raw
+
+    def __call__(self, angles: np.ndarray) -> np.ndarray:
+        """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""
+        return self.combine(self.terms(angles))
+
+    def settings(self) -> dict:
+        """The weights and options, for reports."""
+        return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
+                "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
+                "clusters": self.clusters, "resolution": self.resolution}

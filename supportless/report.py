@@ -1,0 +1,135 @@
+"""Reports of a pose: support before and after, distortion, intersections.
+
+:func:`pose_measures` measures one pose; :func:`build_report` puts the rest
+pose and the found pose side by side as the JSON report of ``optimize``.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import platform
+
+import numpy as np
+
+from .energies.intersection import self_intersection_volume
+from .energies.overhang import overhang_energy, risky_area
+from .energies.support import support_volume
+
+
+def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """Number of intersecting triangle pairs, by CGAL's exact test.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    pairs : int
+        0 for a surface free of self-intersections. Planar (2D) meshes are
+        checked by their overlapping area instead and return -1 here.
+    """
+    if vertices.shape[1] != 3:
+        return -1
+    import igl
+    import igl.copyleft.cgal  # noqa: F401
+
+    out = igl.copyleft.cgal.remesh_self_intersections(np.ascontiguousarray(vertices, np.float64),
+                                                      np.ascontiguousarray(faces, np.int64), detect_only=True)
+    IF = out[2]
+    return int(len(IF))
+
+
+def pose_measures(objective, angles: np.ndarray, exact: bool = True) -> dict:
+    """Everything a report says about one pose.
+
+    Parameters
+    ----------
+    objective : supportless.objective.Objective
+    angles : (m, 3) float64
+    exact : bool
+        Also count intersecting face pairs exactly (CGAL; slower).
+
+    Returns
+    -------
+    measures : dict
+        Raw energies (``arap``, ``overhang_prism``, ``support_column``,
+        ``self_intersection_volume``), ``risky_area``, normalised terms and
+        objective, and ``intersecting_face_pairs``.
+    """
+    rig = objective.rig
+    V = rig.pose(angles)
+    value, terms, raw = objective.evaluate(angles)
+    out = {
+        "objective": float(value),
+        "terms": {k: float(v) for k, v in terms.items()},
+        "arap": float(raw["arap"]),
+        "overhang_prism": float(overhang_energy(V, rig.faces, rig.up, objective.overhang_angle)),
+        "support_column": float(support_volume(V, rig.faces, rig.up, objective.overhang_angle,
+                                               objective.resolution)),
+        "risky_area": float(risky_area(V, rig.faces, rig.up, objective.overhang_angle)),
+        "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
+    }
+    if exact:
+        out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
+    return out
+
+
+def reduction(before: float, after: float) -> float | None:
+    """Percentage reduction ``100 (1 - after / before)``; None when ``before`` is 0."""
+    return None if before <= 0 else 100.0 * (1.0 - after / before)
+
+
+def build_report(rig, objective, result, settings: dict, runtime: float) -> dict:
+    """The JSON report of a pose search.
+
+    Parameters
+    ----------
+    rig : Rig
+    objective : Objective
+    result : supportless.search.PoseResult
+    settings : dict
+        The search settings, stored as given.
+    runtime : float
+        Seconds.
+
+    Returns
+    -------
+    report : dict
+    """
+    before = pose_measures(objective, rig.rest_angles())
+    after = pose_measures(objective, result.angles)
+    displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
+    height = float(np.ptp(rig.vertices @ rig.up))
+    return {
+        "model": rig.name,
+        "vertices": int(len(rig.vertices)),
+        "faces": int(len(rig.faces)),
+        "bones": int(rig.bone_count),
+        "dimension": int(rig.dim),
+        "up": rig.up.tolist(),
+        "before": before,
+        "after": after,
+        "reduction_percent": {
+            "overhang_prism": reduction(before["overhang_prism"], after["overhang_prism"]),
+            "support_column": reduction(before["support_column"], after["support_column"]),
+            "risky_area": reduction(before["risky_area"], after["risky_area"]),
+        },
+        "max_vertex_displacement": float(displacement.max()),
+        "max_vertex_displacement_relative_to_height": float(displacement.max() / height) if height else None,
+        "angles_deg": np.degrees(result.angles).round(4).tolist(),
+        "runtime_seconds": float(runtime),
+        "interrupted": bool(result.interrupted),
+        "settings": settings,
+        "history": [float(v) for v in result.history],
+        "term_history": {k: [float(x) for x in v] for k, v in result.term_history.items()},
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
+    }
+
+
+def _cpu_count() -> int:
+    import os
+
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
