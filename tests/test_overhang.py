@@ -1,0 +1,258 @@
+"""Tests for the prism overhang energy (supportless.energies.overhang)."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from supportless.energies.overhang import (
+    boundary_edges,
+    overhang_energy,
+    risky_area,
+    risky_faces,
+)
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+def box(lo, hi):
+    m = trimesh.creation.box(bounds=[lo, hi])
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+
+
+def union(*meshes):
+    ms = [trimesh.Trimesh(v, f, process=False) for v, f in meshes]
+    u = trimesh.boolean.union(ms, engine="manifold")
+    assert u.is_watertight
+    return np.asarray(u.vertices, float), np.asarray(u.faces, np.int64)
+
+
+def t_shape():
+    """Stem 1x1x3 on the plate, arm 4x1x1 on top; arm undersides (area 3) at z=2."""
+    return union(box([-0.5, -0.5, 0], [0.5, 0.5, 3]), box([-2, -0.5, 2], [2, 0.5, 3]))
+
+
+def tilted_arm_shape(angle_deg):
+    """Stem plus an arm rising outward at ``angle_deg`` from horizontal."""
+    stem = box([-0.5, -0.5, 0], [0.5, 0.5, 3])
+    v, f = box([0, -0.5, -0.5], [3, 0.5, 0.5])
+    a = np.deg2rad(angle_deg)
+    R = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
+    return union(stem, (v @ R.T + [0, 0, 1.5], f))
+
+
+def cells_mesh(cells):
+    """2D counter-clockwise triangle mesh of unit grid cells (welded)."""
+    idx = {}
+    verts, faces = [], []
+
+    def vid(p):
+        if p not in idx:
+            idx[p] = len(verts)
+            verts.append(p)
+        return idx[p]
+
+    for x, y in cells:
+        a, b, c, d = vid((x, y)), vid((x + 1, y)), vid((x + 1, y + 1)), vid((x, y + 1))
+        faces += [(a, b, c), (a, c, d)]
+    return np.array(verts, float), np.array(faces, np.int64)
+
+
+def t_shape_2d():
+    """Stem cell column x in [1,2], y in [0,3]; arm y in [2,3], x in [0,3]."""
+    cells = [(1, 0), (1, 1), (1, 2), (0, 2), (2, 2)]
+    return cells_mesh(cells)
+
+
+def rot_about(axis, angle):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    return trimesh.transformations.rotation_matrix(angle, axis)[:3, :3]
+
+
+def brute_force(V, F, up, theta=45.0):
+    """Independent per-face Python loop using trimesh normals/areas."""
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    m = trimesh.Trimesh(V, F, process=False)
+    tau = np.cos(np.deg2rad(theta))
+    plate = (V @ up).min()
+    E = 0.0
+    for fi in range(len(F)):
+        nd = m.face_normals[fi] @ up
+        if nd < -tau:
+            E += m.area_faces[fi] * abs(nd) * (m.triangles_center[fi] @ up - plate)
+    return E
+
+
+def test_box_on_plate_is_zero():
+    V, F = box([0, 0, 0], [1, 2, 3])
+    assert overhang_energy(V, F, UP) == 0.0
+    # lifted box: the plate is its lowest point, still zero
+    assert overhang_energy(V + [0, 0, 7.0], F, UP) == 0.0
+    # but the bottom is risky (area 2) even though it costs nothing
+    assert risky_area(V, F, UP) == pytest.approx(2.0)
+
+
+def test_t_shape_exact():
+    V, F = t_shape()
+    assert overhang_energy(V, F, UP) == pytest.approx(3.0 * 2.0, rel=1e-12)
+    # risky: arm undersides (3) + stem bottom (1)
+    assert risky_area(V, F, UP) == pytest.approx(4.0, rel=1e-12)
+    mask = risky_faces(V, F, UP)
+    normals = trimesh.Trimesh(V, F, process=False).face_normals
+    assert mask.shape == (len(F),) and mask.dtype == bool
+    np.testing.assert_array_equal(mask, normals[:, 2] < -0.5)
+    # upside down the T stands on its bar: nothing overhangs
+    assert overhang_energy(V, F, -UP) == pytest.approx(0.0, abs=1e-12)
+    assert risky_area(V, F, -UP) == pytest.approx(4.0, rel=1e-12)
+
+
+def test_inverted_winding_same_result():
+    V, F = t_shape()
+    assert overhang_energy(V, F[:, ::-1], UP) == pytest.approx(6.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("angle", [50.0, 60.0, 80.0])
+def test_arm_tilted_beyond_threshold_is_zero(angle):
+    V, F = tilted_arm_shape(angle)
+    assert overhang_energy(V, F, UP) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_arm_below_threshold_matches_brute_force():
+    V, F = tilted_arm_shape(30.0)
+    E = overhang_energy(V, F, UP)
+    assert E > 0.1
+    assert E == pytest.approx(brute_force(V, F, UP), rel=1e-10)
+
+
+def test_threshold_angle_parameter():
+    # arm underside slopes 40 deg from horizontal: risky at theta=45, not at 35
+    V, F = tilted_arm_shape(40.0)
+    assert overhang_energy(V, F, UP, overhang_angle=45.0) > 0.1
+    assert overhang_energy(V, F, UP, overhang_angle=35.0) == pytest.approx(0.0, abs=1e-12)
+    assert overhang_energy(V, F, UP, overhang_angle=35.0) == pytest.approx(
+        brute_force(V, F, UP, 35.0), abs=1e-12
+    )
+
+
+def test_bunny_random_directions_brute_force():
+    m = trimesh.load("/work/shared/data/bunny.obj", process=False)
+    V, F = np.asarray(m.vertices), np.asarray(m.faces)
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        up = rng.normal(size=3)
+        assert overhang_energy(V, F, up) == pytest.approx(brute_force(V, F, up), rel=1e-9)
+
+
+def test_batch_equals_single():
+    V, F = t_shape()
+    rng = np.random.default_rng(0)
+    Rs = [rot_about(rng.normal(size=3), rng.uniform(0, np.pi)) for _ in range(5)]
+    VV = np.stack([V @ R.T for R in Rs])
+    for fn in (overhang_energy, risky_area):
+        batch = fn(VV, F, UP)
+        assert batch.shape == (5,) and batch.dtype == np.float64
+        single = np.array([fn(v, F, UP) for v in VV])
+        np.testing.assert_allclose(batch, single, rtol=1e-14)
+        assert isinstance(fn(VV[0], F, UP), float)
+    masks = risky_faces(VV, F, UP)
+    assert masks.shape == (5, len(F))
+    for p in range(5):
+        np.testing.assert_array_equal(masks[p], risky_faces(VV[p], F, UP))
+    assert len(np.unique(np.round(overhang_energy(VV, F, UP), 9))) > 1
+
+
+def test_scaling_cubic():
+    V, F = tilted_arm_shape(30.0)
+    up = np.array([0.2, -0.1, 1.0])
+    E = overhang_energy(V, F, up)
+    for s in (0.5, 3.0):
+        assert overhang_energy(s * V, F, up) == pytest.approx(s**3 * E, rel=1e-12)
+
+
+def test_rigid_motion_about_up_invariant():
+    V, F = tilted_arm_shape(30.0)
+    up = np.array([1.0, 2.0, 3.0])
+    E = overhang_energy(V, F, up)
+    R = rot_about(up, 1.1)
+    V2 = V @ R.T + np.array([5.0, -3.0, 2.0])
+    assert overhang_energy(V2, F, up) == pytest.approx(E, rel=1e-12)
+    # non-normalised up gives the same value
+    assert overhang_energy(V2, F, 7.0 * up) == pytest.approx(E, rel=1e-12)
+    # a rotation NOT about up changes it
+    assert abs(overhang_energy(V @ rot_about([1, 0, 0], 0.7).T, F, up) - E) > 1e-3
+
+
+# ----------------------------------------------------------------------- 2D
+
+
+def test_boundary_edges_square():
+    V, F = cells_mesh([(0, 0)])
+    E = boundary_edges(F)
+    assert E.shape == (4, 2) and E.dtype == np.int64
+    # counter-clockwise: the region is on the left of every edge
+    c = V.mean(axis=0)
+    for a, b in E:
+        t = V[b] - V[a]
+        assert t[0] * (c - V[a])[1] - t[1] * (c - V[a])[0] > 0
+    # clockwise input is re-oriented when vertices are given
+    E2 = boundary_edges(F[:, ::-1], V)
+    for a, b in E2:
+        t = V[b] - V[a]
+        assert t[0] * (c - V[a])[1] - t[1] * (c - V[a])[0] > 0
+    # interior diagonal excluded
+    assert not any({a, b} == {0, 2} for a, b in E)
+
+
+def test_2d_t_shape_and_box():
+    V, F = cells_mesh([(0, 0), (1, 0), (0, 1), (1, 1)])
+    up = np.array([0.0, 1.0])
+    assert overhang_energy(V, F, up) == 0.0
+    V, F = t_shape_2d()
+    # arm undersides: length 2 at height 2
+    assert overhang_energy(V, F, up) == pytest.approx(4.0, rel=1e-12)
+    assert overhang_energy(V, F[:, ::-1], up) == pytest.approx(4.0, rel=1e-12)
+    assert risky_area(V, F, up) == pytest.approx(3.0, rel=1e-12)
+    mask = risky_faces(V, F, up)
+    assert mask.shape == (len(boundary_edges(F)),) and mask.sum() == 3
+    # sideways printing: underside is the left column of the T (x=0, y 2..3)
+    # and the stem's left side (x=1, y 0..2) -- plate at x=0
+    assert overhang_energy(V, F, np.array([1.0, 0.0])) == pytest.approx(2.0 * 1.0, rel=1e-12)
+
+
+def test_2d_tilt_threshold():
+    # a parallelogram leaning at 60 deg -> underside edge is horizontal on the
+    # plate (0) and the overhanging slanted side has slope 60 deg: not risky
+    a = np.deg2rad(60.0)
+    V = np.array([[0, 0], [1, 0], [1 + 2 * np.cos(a), 2 * np.sin(a)], [2 * np.cos(a), 2 * np.sin(a)]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    up = np.array([0.0, 1.0])
+    assert overhang_energy(V, F, up) == 0.0
+    a = np.deg2rad(30.0)
+    V = np.array([[0, 0], [1, 0], [1 + 2 * np.cos(a), 2 * np.sin(a)], [2 * np.cos(a), 2 * np.sin(a)]])
+    # slanted underside of length 2 with |n.d| = cos 30, centroid height sin30
+    expect = 2.0 * np.cos(a) * np.sin(a)
+    assert overhang_energy(V, F, up) == pytest.approx(expect, rel=1e-12)
+
+
+def test_2d_scaling_rigid_and_batch():
+    V, F = t_shape_2d()
+    up = np.array([0.3, 1.0])
+    E = overhang_energy(V, F, up)
+    assert E > 0
+    assert overhang_energy(2.5 * V, F, up) == pytest.approx(2.5**2 * E, rel=1e-12)
+    # translation only (rotation about up in 2D is the identity or a mirror)
+    assert overhang_energy(V + [4.0, -1.0], F, up) == pytest.approx(E, rel=1e-12)
+    # mirror across the up axis (rotation by pi about up in 3D) keeps E
+    u = up / np.linalg.norm(up)
+    M = 2 * np.outer(u, u) - np.eye(2)
+    assert overhang_energy(V @ M.T, F, up) == pytest.approx(E, rel=1e-12)
+    rng = np.random.default_rng(1)
+    VV = np.stack([V @ rot_about([0, 0, 1], t)[:2, :2].T for t in rng.uniform(0, 6, 4)])
+    np.testing.assert_allclose(overhang_energy(VV, F, up), [overhang_energy(v, F, up) for v in VV], rtol=1e-14)
+
+
+def test_bad_up_raises():
+    V, F = t_shape()
+    with pytest.raises(ValueError):
+        overhang_energy(V, F, [0.0, 0.0, 0.0])
+    with pytest.raises(ValueError):
+        overhang_energy(V, F, [0.0, 1.0])
