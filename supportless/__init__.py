@@ -1,1 +1,31 @@
-"""supportless: re-pose a rigged model so it prints with less support."""
+"""supportless: re-pose a rigged model so it 3D-prints with far less support.
+
+The pipeline (see the README): a closed surface and its skeleton become a
+:class:`Rig` (tetrahedral mesh + bounded biharmonic weights); Euler angles per
+bone pose it by linear blend skinning; three energies of the posed surface
+(ARAP distortion, overhang support, self-intersection volume) make the
+:class:`Objective`; :func:`optimize` searches the rotations with a particle
+swarm.
+"""
+
+from .energies.arap import arap_energy, arap_energy_direct, arap_precompute
+from .energies.intersection import self_intersection_volume
+from .energies.overhang import overhang_energy, risky_area, risky_faces
+from .energies.support import support_volume
+from .errors import InputError, SupportlessError
+from .io import read_mesh, read_pose, read_tgf, write_mesh, write_pose, write_tgf
+from .kinematics import forward_kinematics, lbs_matrix, skin
+from .objective import Objective
+from .rig import Rig, load_rig, prepare_rig
+from .search import PoseResult, optimize, particle_swarm
+from .shapes import DEMO_FIGURES, demo_figure
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "DEMO_FIGURES", "InputError", "Objective", "PoseResult", "Rig", "SupportlessError", "arap_energy",
+    "arap_energy_direct", "arap_precompute", "demo_figure", "forward_kinematics", "lbs_matrix", "load_rig",
+    "optimize", "overhang_energy", "particle_swarm", "prepare_rig", "read_mesh", "read_pose", "read_tgf",
+    "risky_area", "risky_faces", "self_intersection_volume", "skin", "support_volume", "write_mesh",
+    "write_pose", "write_tgf",
+]

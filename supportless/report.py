@@ -133,3 +133,49 @@ def _cpu_count() -> int:
     import os
 
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def write_pictures(folder, rig, result) -> list[tuple[str, str]]:
+    """Before/after renders (same camera, risky faces red, skeleton drawn) and a convergence plot.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+    rig : Rig
+    result : supportless.search.PoseResult
+
+    Returns
+    -------
+    written : list of (label, path)
+    """
+    from pathlib import Path
+
+    from .energies.overhang import risky_faces
+    from .render import plot_convergence, render_before_after
+    from .search import place_on_plate
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    rest = place_on_plate(rig.vertices, rig.up)
+    posed = result.vertices
+    shift_rest = rest[0] - rig.vertices[0]
+    shift_posed = posed[0] - rig.pose(result.angles)[0]
+    joints_rest = rig.joints + shift_rest
+    joints_posed = rig.posed_joints(result.angles) + shift_posed
+    risky = rig.dim == 3
+    before_after = render_before_after(
+        folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
+        before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
+        before_risky=risky_faces(rest, rig.faces, rig.up) if risky else None,
+        after_risky=risky_faces(posed, rig.faces, rig.up) if risky else None,
+        titles=("rest pose", "found pose"),
+        suptitle=f"{rig.name}: support (prism) "
+                 f"{_fmt_pct(result.report.get('reduction_percent', {}).get('overhang_prism'))}; red = needs support")
+    terms = {k: v for k, v in result.term_history.items() if len(v)}
+    convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
+                                   title=f"{rig.name}: best objective per iteration")
+    return [("before/after picture", str(before_after)), ("convergence plot", str(convergence))]
+
+
+def _fmt_pct(x) -> str:
+    return "n/a" if x is None else f"{x:.0f} % less"

@@ -1,0 +1,368 @@
+"""The ``supportless`` command line: thin commands over the Python API.
+
+Every user error (bad file, bad option) prints one line on stderr and exits
+with status 2; nothing half-written is left on disk.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+
+from .errors import InputError, SupportlessError
+
+EXIT_USER_ERROR = 2
+
+
+def _fail(message: str) -> None:
+    click.echo(f"supportless: error: {message}", err=True)
+    sys.exit(EXIT_USER_ERROR)
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(stderr=False, highlight=False)
+
+
+def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False):
+    from .rig import load_rig
+
+    def progress(msg):
+        if not quiet:
+            click.echo(f"  {msg} ...", err=True)
+
+    return load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
+                    progress=progress)
+
+
+def rig_options(f):
+    """Options shared by every command that reads a rigged model."""
+    f = click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
+                     help="Rig cache folder (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")(f)
+    f = click.option("--no-cache", is_flag=True, help="Prepare the rig again; do not read or write the cache.")(f)
+    f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed skinning weights (.dmat, one row per --tets vertex).")(f)
+    f = click.option("--tets", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
+    f = click.option("--up", default="y", show_default=True,
+                     help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
+    f = click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None,
+                     help="TGF skeleton (default: MODEL with .tgf).")(f)
+    return f
+
+
+class _Group(click.Group):
+    """Turns the package's own errors into one line and exit status 2."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except SupportlessError as exc:
+            _fail(str(exc))
+        except KeyboardInterrupt:
+            click.echo("supportless: interrupted", err=True)
+            sys.exit(130)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="supportless")
+def main():
+    """Re-pose a rigged model so it 3D-prints with less support material."""
+
+
+# --------------------------------------------------------------------------- #
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@rig_options
+def prepare(model, skeleton, up, tets, weights, no_cache, cache_dir):
+    """Tetrahedralise MODEL and compute its skinning weights (cached)."""
+    t0 = time.perf_counter()
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    dt = time.perf_counter() - t0
+    source = "from the cache" if rig.info.get("from_cache") else "prepared"
+    click.echo(f"{rig.name}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
+               f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones, {rig.dim}D")
+    click.echo(f"{source} in {dt:.2f} s" + (f"  (cache: {rig.info['cache']})" if rig.info.get("cache") else ""))
+
+
+# --------------------------------------------------------------------------- #
+def _search_options(f):
+    opts = [
+        click.option("--particles", default=200, show_default=True, type=click.IntRange(2, None)),
+        click.option("--iterations", default=120, show_default=True, type=click.IntRange(0, None)),
+        click.option("--seed", default=0, show_default=True, type=int),
+        click.option("--max-angle", default=30.0, show_default=True, type=click.FloatRange(0, 180),
+                     help="Bound of every free Euler angle, degrees."),
+        click.option("--overhang-angle", default=45.0, show_default=True, type=click.FloatRange(0, 90),
+                     help="Overhang threshold, degrees from the build plate."),
+        click.option("--w-arap", type=float, default=None, help="Weight of the distortion term."),
+        click.option("--w-overhang", type=float, default=None, help="Weight of the support term."),
+        click.option("--w-intersect", type=float, default=None, help="Weight of the self-intersection term."),
+        click.option("--overhang-model", type=click.Choice(["prism", "column"]), default="prism",
+                     show_default=True, help="Support estimate the search minimises."),
+        click.option("--fix", multiple=True, help="Bone number (1-based, TGF order) to keep fixed; repeatable."),
+        click.option("--free", multiple=True, help="Bone number to free even if fixed by default; repeatable."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap, w_overhang,
+                w_intersect, overhang_model, fix, free, quiet=False):
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .search import optimize
+
+    progress = Progress(TextColumn("[bold]searching"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                        TextColumn("{task.fields[status]}"), console=console, disable=quiet, transient=False)
+    with progress:
+        task = progress.add_task("search", total=iterations, status="")
+
+        def callback(it, info):
+            t = info["terms"]
+            progress.update(task, completed=it, status=f"best {info['value']:.4f}  (arap {t['arap']:.4f}, "
+                                                       f"overhang {t['overhang']:.4f}, intersect "
+                                                       f"{t['intersection']:.4f})")
+
+        try:
+            return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
+                            overhang_angle=overhang_angle, w_arap=w_arap, w_overhang=w_overhang,
+                            w_intersect=w_intersect, overhang_model=overhang_model, fix=list(fix),
+                            free=list(free), callback=callback)
+        except ValueError as exc:  # bad --fix/--free
+            raise InputError(None, str(exc)) from None
+
+
+def _summary_table(report: dict):
+    from rich.table import Table
+
+    b, a, red = report["before"], report["after"], report["reduction_percent"]
+
+    def pct(x):  # a reduction of 40 % shows as -40.0 %
+        return "-" if x is None else f"{-x:+.1f} %"
+
+    table = Table(title=f"{report['model']}: rest pose vs found pose")
+    for col in ("measure", "before", "after", "change"):
+        table.add_column(col, justify="right" if col != "measure" else "left")
+    table.add_row("support, prism estimate", f"{b['overhang_prism']:.4g}", f"{a['overhang_prism']:.4g}",
+                  pct(red["overhang_prism"]))
+    table.add_row("support, column estimate", f"{b['support_column']:.4g}", f"{a['support_column']:.4g}",
+                  pct(red["support_column"]))
+    table.add_row("risky area", f"{b['risky_area']:.4g}", f"{a['risky_area']:.4g}", pct(red["risky_area"]))
+    table.add_row("distortion (ARAP / volume)", f"{b['terms']['arap']:.4g}", f"{a['terms']['arap']:.4g}", "")
+    table.add_row("self-intersection volume", f"{b['self_intersection_volume']:.4g}",
+                  f"{a['self_intersection_volume']:.4g}", "")
+    table.add_row("intersecting face pairs (exact)", str(b.get("intersecting_face_pairs", "-")),
+                  str(a.get("intersecting_face_pairs", "-")), "")
+    return table
+
+
+def _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report=None):
+    from .io import write_json, write_mesh, write_pose
+    from .report import write_pictures
+
+    written = []
+    if output:
+        write_mesh(output, result.vertices, rig.faces)
+        written.append(("posed mesh", output))
+    if pose:
+        write_pose(pose, result.angles, rig.bones, rig.joints, extra={"objective": result.value})
+        written.append(("pose", pose))
+    if pictures:
+        for label, path in write_pictures(pictures, rig, result):
+            written.append((label, path))
+    if report_path:
+        report = dict(result.report)
+        if slice_report is not None:
+            report["slice_check"] = slice_report
+        write_json(report_path, report)
+        written.append(("report", report_path))
+    for label, path in written:
+        console.print(f"  {label}: {path}")
+    return written
+
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@rig_options
+@_search_options
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="Posed mesh to write (.stl, .obj, .ply, .off, .3mf, .glb).")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="JSON report.")
+@click.option("--pose", type=click.Path(dir_okay=False), default=None, help="Pose JSON (for `apply`).")
+@click.option("--pictures", type=click.Path(file_okay=False), default=None,
+              help="Folder for before/after pictures and the convergence plot.")
+@click.option("--slice-check", "slice_check_flag", is_flag=True,
+              help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
+@click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
+def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles, iterations, seed, max_angle,
+             overhang_angle, w_arap, w_overhang, w_intersect, overhang_model, fix, free, output, report_path, pose,
+             pictures, slice_check_flag, quiet):
+    """Search a pose of MODEL that needs less support, and write it."""
+    from .io import MESH_FORMATS
+
+    ext = Path(output).suffix.lower().lstrip(".")
+    if ext not in MESH_FORMATS:
+        raise InputError(output, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    console = _console()
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
+    result = _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap,
+                         w_overhang, w_intersect, overhang_model, fix, free, quiet)
+    if result.interrupted:
+        console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
+    slice_report = None
+    if slice_check_flag:
+        slice_report = _slice(rig, result.vertices, console)
+    console.print(_summary_table(result.report))
+    if slice_report:
+        console.print(f"PrusaSlicer support filament: {slice_report['before']['support_mm']:.0f} mm -> "
+                      f"{slice_report['after']['support_mm']:.0f} mm "
+                      f"({slice_report['reduction_percent']:.1f} % less)")
+    console.print(f"search took {result.report['runtime_seconds']:.1f} s")
+    _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report)
+
+
+def _slice(rig, posed_vertices, console, height_mm=60.0):
+    from .slicer import slice_check
+
+    console.print("slicing rest and posed meshes with PrusaSlicer ...")
+    up3 = np.append(rig.up, 0.0) if rig.dim == 2 else rig.up
+    report = slice_check((rig.vertices, rig.faces), (posed_vertices, rig.faces), up=up3, height_mm=height_mm)
+    return report.to_dict()
+
+
+# --------------------------------------------------------------------------- #
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@rig_options
+@click.option("--pose", type=click.Path(dir_okay=False), required=True, help="Pose JSON from `optimize --pose`.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True, help="Posed mesh to write.")
+def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output):
+    """Apply a saved pose to MODEL and write the posed mesh."""
+    from .io import read_pose, write_mesh
+    from .search import place_on_plate
+
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    angles = read_pose(pose, rig.bones)
+    write_mesh(output, place_on_plate(rig.pose(angles), rig.up), rig.faces)
+    click.echo(f"wrote {output}")
+
+
+# --------------------------------------------------------------------------- #
+@main.command(name="slice-check")
+@click.argument("original", type=click.Path(dir_okay=False))
+@click.argument("posed", type=click.Path(dir_okay=False))
+@click.option("--up", default="y", show_default=True, help="Printing direction of both meshes.")
+@click.option("--height-mm", default=60.0, show_default=True, type=click.FloatRange(min=1.0),
+              help="The original is scaled to this height along up; the posed mesh by the same factor.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def slice_check_cmd(original, posed, up, height_mm, as_json):
+    """Measure the support PrusaSlicer lays down for ORIGINAL and POSED."""
+    from .io import parse_up, read_mesh
+    from .slicer import SlicerError, SlicerNotFound, slice_check
+
+    up_vec = parse_up(up)
+    meshes = [read_mesh(original), read_mesh(posed)]
+    try:
+        report = slice_check(meshes[0], meshes[1], up=up_vec, height_mm=height_mm).to_dict()
+    except (SlicerNotFound, SlicerError) as exc:
+        _fail(str(exc))
+    if as_json:
+        click.echo(json.dumps(report, indent=2))
+        return
+    b, a = report["before"], report["after"]
+    click.echo(f"support filament at {height_mm:g} mm tall (PrusaSlicer):")
+    click.echo(f"  original: {b['support_mm']:8.0f} mm  ({b['support_cm3']:.2f} cm3)")
+    click.echo(f"  posed:    {a['support_mm']:8.0f} mm  ({a['support_cm3']:.2f} cm3)")
+    red = report["reduction_percent"]
+    click.echo(f"  reduction: {red:.1f} %" if red is not None else "  reduction: n/a (no support before)")
+
+
+# --------------------------------------------------------------------------- #
+@main.command()
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="supportless-demo", show_default=True,
+              help="Folder for the demo's files.")
+@click.option("--figure", type=click.Choice(["tpose", "branch", "woody2d"]), default="tpose", show_default=True)
+@click.option("--particles", default=60, show_default=True, type=click.IntRange(2, None))
+@click.option("--iterations", default=40, show_default=True, type=click.IntRange(0, None))
+@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--quiet", "-q", is_flag=True)
+def demo(out_dir, figure, particles, iterations, seed, quiet):
+    """Run the whole pipeline on a built-in figure and write its files."""
+    from .io import write_mesh, write_tgf
+    from .render import render_mesh
+    from .rig import load_rig
+
+    console = _console()
+    out = Path(out_dir)
+    t0 = time.perf_counter()
+    rig = load_rig(f"demo:{figure}", up="y")
+    console.print(f"prepared {rig!r} in {time.perf_counter() - t0:.1f} s")
+    rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"
+    write_mesh(rest_mesh, rig.vertices, rig.faces)
+    write_tgf(out / f"{figure}.tgf", rig.joints, rig.bones)
+    from .energies.overhang import risky_faces
+
+    rest_png = render_mesh(out / f"{figure}-rest.png", rig.vertices, rig.faces, rig.up, rig.joints, rig.bones,
+                           risky=_risky_for_picture(rig, rig.vertices, risky_faces),
+                           title=f"{figure}: rest pose")
+    result = _run_search(rig, console, particles, iterations, seed, 30.0, 45.0, None, None, None, "prism", (), (),
+                         quiet)
+    console.print(_summary_table(result.report))
+    console.print(f"search took {result.report['runtime_seconds']:.1f} s")
+    console.print(f"wrote to {out}/:")
+    console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
+    posed_ext = "stl" if rig.dim == 3 else "obj"
+    _write_outputs(rig, result, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
+                   out / f"{figure}-report.json", out, console)
+
+
+def _risky_for_picture(rig, V, risky_faces):
+    mask = risky_faces(V, rig.faces, rig.up)
+    return mask if rig.dim == 3 else None
+
+
+# --------------------------------------------------------------------------- #
+@main.command()
+@click.argument("model", required=False, type=click.Path(dir_okay=False))
+@rig_options
+@click.option("--demo", "demo_figure", is_flag=True, help="Open the built-in tpose figure.")
+@click.option("--port", default=None, type=click.IntRange(1, 65535), help="Port (default: a free one from 8080).")
+@click.option("--host", default="127.0.0.1", show_default=True, help="Address to bind.")
+def view(model, skeleton, up, tets, weights, no_cache, cache_dir, demo_figure, port, host):
+    """Pose MODEL in the browser: live supports, optimise, export."""
+    from .ui.app import run_app
+
+    if demo_figure:
+        model = "demo:tpose"
+    if model is None:
+        _fail("give a MODEL (with --skeleton) or --demo")
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    run_app(rig, host=host, port=port, block=True)
+
+
+# --------------------------------------------------------------------------- #
+@main.command()
+@click.argument("model", required=False, type=click.Path(dir_okay=False))
+@click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None)
+@click.option("--up", default="y", show_default=True)
+@click.option("--particles", default=200, show_default=True, type=click.IntRange(2, None))
+@click.option("--iterations", default=120, show_default=True, type=click.IntRange(1, None))
+@click.option("--backend", type=click.Choice(["fast", "numpy", "both"]), default="both", show_default=True)
+def bench(model, skeleton, up, particles, iterations, backend):
+    """Time preparation, one pose, one swarm iteration and a whole search."""
+    from .bench import run_bench
+
+    run_bench(model, skeleton, up, particles=particles, iterations=iterations, backend=backend,
+              echo=click.echo)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()
