@@ -1,0 +1,285 @@
+"""Tests for supportless.slicer (PrusaSlicer-based support measurement)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import stat
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from supportless import slicer as sl
+from supportless.slicer import (
+    SliceReport,
+    SlicerError,
+    SlicerNotFound,
+    find_prusa_slicer,
+    mm_to_cm3,
+    parse_filament_used,
+    place_vertices,
+    reduction_percent,
+    rotation_to_z,
+    scale_for_height,
+    slice_check,
+)
+
+SAMPLE_GCODE = textwrap.dedent(
+    """\
+    G1 X10 Y10 E0.5
+    M107
+    ; filament used [mm] = 1491.16
+    ; filament used [cm3] = 3.59
+    ; total filament used [g] = 0.00
+    ; total filament cost = 0.00
+    ; estimated printing time (normal mode) = 12m 3s
+
+    ; prusaslicer_config = begin
+    ; layer_height = 0.2
+    ; prusaslicer_config = end
+    """
+)
+
+
+# ---------------------------------------------------------------------------
+# Pure logic (always run)
+# ---------------------------------------------------------------------------
+
+
+def test_parse_filament_used():
+    mm, cm3 = parse_filament_used(SAMPLE_GCODE)
+    assert mm == pytest.approx(1491.16)
+    assert cm3 == pytest.approx(3.59)
+
+
+def test_parse_filament_used_without_cm3_and_multi_extruder():
+    mm, cm3 = parse_filament_used("; filament used [mm] = 10.5, 2.5\n")
+    assert mm == pytest.approx(13.0)
+    assert cm3 is None
+
+
+def test_parse_filament_used_missing_line_is_slicer_error():
+    with pytest.raises(SlicerError, match="filament used"):
+        parse_filament_used("G1 X0\n; total filament used [g] = 1\n")
+
+
+def test_rotation_to_z_is_proper_rotation():
+    for up in [(0, 1, 0), (1, 0, 0), (0, 0, 1), (0, 0, -1), (0, -1, 0), (1, 2, 3)]:
+        R = rotation_to_z(up)
+        u = np.asarray(up, float) / np.linalg.norm(up)
+        np.testing.assert_allclose(R @ u, [0, 0, 1], atol=1e-12)
+        np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+        assert np.linalg.det(R) == pytest.approx(1.0)
+    # up = +Y: +90 deg about X (y -> z, z -> -y)
+    np.testing.assert_allclose(rotation_to_z((0, 1, 0)) @ [0, 0, 1], [0, -1, 0], atol=1e-12)
+    with pytest.raises(ValueError):
+        rotation_to_z((0, 0, 0))
+
+
+def test_placement_up_y_gives_60mm_on_bed():
+    rng = np.random.default_rng(0)
+    # model units: 0.15 tall along y, offset away from the origin
+    V = rng.uniform([-0.1, 0.03, -0.06], [0.06, 0.18, 0.06], size=(500, 3))
+    s = scale_for_height(V, (0, 1, 0), 60.0)
+    P = place_vertices(V, (0, 1, 0), s, center_xy=(125.0, 105.0))
+    assert P[:, 2].min() == pytest.approx(0.0, abs=1e-9)
+    assert P[:, 2].max() == pytest.approx(60.0)
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    assert 0.5 * (lo[0] + hi[0]) == pytest.approx(125.0)
+    assert 0.5 * (lo[1] + hi[1]) == pytest.approx(105.0)
+    # the model's y extent became the print's z extent
+    assert np.ptp(V[:, 1]) * s == pytest.approx(60.0)
+    # x is preserved (up to scale), model z maps to -y
+    np.testing.assert_allclose(np.ptp(P[:, 0]), np.ptp(V[:, 0]) * s)
+    np.testing.assert_allclose(np.ptp(P[:, 1]), np.ptp(V[:, 2]) * s)
+
+
+def test_posed_mesh_uses_original_scale():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 2, 0], [0, 0, 1]], float)
+    s = scale_for_height(V, (0, 1, 0), 60.0)
+    assert s == pytest.approx(30.0)
+    posed = V * [1, 0.5, 1]  # posed mesh only 1 unit tall
+    P = place_vertices(posed, (0, 1, 0), s)
+    assert np.ptp(P[:, 2]) == pytest.approx(30.0)
+
+
+def test_reduction_and_volume_maths():
+    assert reduction_percent(3360.0, 840.0) == pytest.approx(75.0)
+    assert reduction_percent(100.0, 150.0) == pytest.approx(-50.0)
+    assert reduction_percent(100.0, 0.0) == pytest.approx(100.0)
+    assert reduction_percent(0.0, 0.0) is None
+    assert mm_to_cm3(1000.0) == pytest.approx(math.pi * 0.875**2)
+    assert mm_to_cm3(3360.0) == pytest.approx(8.0812, abs=1e-3)
+
+
+def test_last_error_line_strips_log_prefix():
+    err = (
+        "[2026-11-22 00:06:54.882778] [0x00007f64] [trace]   Initializing StaticPrintConfigs\n"
+        "[2026-11-22 00:06:54.886943] [0x00007f64] [error]   stl_open: empty file\n"
+        "bad.stl: Loading of a model file failed.\n\n"
+    )
+    assert sl._last_error_line(err) == "bad.stl: Loading of a model file failed."
+    assert sl._last_error_line(err.rsplit("bad.stl", 1)[0]) == "stl_open: empty file"
+
+
+def test_report_to_dict_is_json_ready():
+    r = SliceReport(
+        support_mm_before=np.float64(100.0),
+        support_mm_after=25.0,
+        support_cm3_before=mm_to_cm3(100.0),
+        support_cm3_after=mm_to_cm3(25.0),
+        reduction_percent=75.0,
+        total_mm_before=1100.0,
+        total_mm_after=1025.0,
+        model_mm_before=1000.0,
+        model_mm_after=1000.0,
+        config=dict(sl.DEFAULT_CONFIG),
+    )
+    d = r.to_dict()
+    assert json.loads(json.dumps(d)) == d
+    assert d["support_mm_before"] == 100.0 and d["reduction_percent"] == 75.0
+    assert d["config"]["support-material-threshold"] == "45"
+
+
+def test_default_config_is_explicit():
+    cfg = sl.DEFAULT_CONFIG
+    assert cfg["layer-height"] == "0.2"
+    assert cfg["perimeters"] == "2"
+    assert cfg["fill-density"] == "15%"
+    assert cfg["support-material-threshold"] == "45"
+    assert cfg["filament-diameter"] == "1.75"
+    assert sl.SUPPORT_OPTIONS == ("--support-material", "--support-material-auto")
+
+
+# --- finding the slicer and error handling, with fake executables ----------
+
+
+def _fake_exe(tmp_path, name, body):
+    p = tmp_path / name
+    p.write_text(f"#!{sys.executable}\n" + textwrap.dedent(body))
+    p.chmod(p.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
+    return str(p)
+
+
+def _box_vf():
+    import trimesh
+
+    b = trimesh.creation.box((10, 10, 10))
+    return np.asarray(b.vertices), np.asarray(b.faces)
+
+
+def test_find_prusa_slicer_env_var(tmp_path, monkeypatch):
+    exe = _fake_exe(tmp_path, "my-slicer", "print('hi')\n")
+    monkeypatch.setenv(sl.ENV_VAR, exe)
+    assert find_prusa_slicer() == exe
+    monkeypatch.setenv(sl.ENV_VAR, str(tmp_path / "does-not-exist"))
+    assert find_prusa_slicer() is None
+
+
+def test_slicer_not_found_message(monkeypatch, tmp_path):
+    monkeypatch.setenv(sl.ENV_VAR, str(tmp_path / "nope"))
+    with pytest.raises(SlicerNotFound) as ei:
+        slice_check(_box_vf(), _box_vf())
+    msg = str(ei.value)
+    assert "PrusaSlicer" in msg and "apt-get install prusa-slicer" in msg
+    assert isinstance(ei.value, SlicerError)
+
+
+def test_slicer_failure_is_one_line_error(tmp_path, monkeypatch):
+    exe = _fake_exe(
+        tmp_path,
+        "failing-slicer",
+        """\
+        import sys
+        if "--help" in sys.argv:
+            print("PrusaSlicer-0.0 fake"); sys.exit(0)
+        sys.stderr.write("[2026] [0x1] [trace] Initializing StaticPrintConfigs\\n")
+        sys.stderr.write("something went wrong\\nObject too tall to print.\\n")
+        sys.exit(3)
+        """,
+    )
+    monkeypatch.setenv(sl.ENV_VAR, exe)
+    with pytest.raises(SlicerError) as ei:
+        slice_check(_box_vf(), _box_vf(), timeout=30)
+    msg = str(ei.value)
+    assert "\n" not in msg
+    assert msg.endswith("Object too tall to print.")
+    assert "exit 3" in msg
+
+
+def test_slicer_timeout_is_clear_error(tmp_path, monkeypatch):
+    exe = _fake_exe(tmp_path, "slow-slicer", "import time\ntime.sleep(30)\n")
+    with pytest.raises(SlicerError, match="timed out after 0.5 s"):
+        slice_check(_box_vf(), _box_vf(), timeout=0.5, slicer=exe)
+
+
+def test_unknown_preset(tmp_path):
+    exe = _fake_exe(tmp_path, "x", "pass\n")
+    with pytest.raises(ValueError, match="preset"):
+        slice_check(_box_vf(), _box_vf(), config="nope", slicer=exe)
+
+
+# ---------------------------------------------------------------------------
+# With PrusaSlicer
+# ---------------------------------------------------------------------------
+
+
+@pytest.fixture
+def prusa():
+    exe = find_prusa_slicer()
+    if exe is None:
+        pytest.skip("PrusaSlicer not installed: apt-get install prusa-slicer")
+    return exe
+
+
+def _gamma_mesh():
+    """A post (along +Y) with a horizontal arm at the top sticking out along +X."""
+    import trimesh
+
+    post = trimesh.creation.box((8, 30, 8))
+    post.apply_translation((0, 15, 0))
+    arm = trimesh.creation.box((20, 6, 8))
+    arm.apply_translation((4 + 10 - 1, 27, 0))  # overlaps the post by 1 unit
+    try:
+        m = trimesh.boolean.union([post, arm], engine="manifold")
+    except Exception:  # manifold3d missing: overlapping boxes slice fine too
+        m = trimesh.util.concatenate([post, arm])
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+
+
+def test_arm_up_needs_less_support_than_arm_out(prusa):
+    V, F = _gamma_mesh()
+    # +90 deg about Z: the arm (+X) now points up (+Y), the post lies on the bed
+    Rz = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    posed = (V @ Rz.T, F)
+    r = slice_check((V, F), posed, up=(0, 1, 0), height_mm=30.0, config="fast", timeout=120)
+    assert r.support_mm_before > 50.0, r.to_dict()
+    assert r.support_mm_after < 0.25 * r.support_mm_before, r.to_dict()
+    assert r.reduction_percent is not None and r.reduction_percent > 75.0
+    assert r.size_mm_before[2] == pytest.approx(30.0, abs=0.05)
+    assert r.config["layer-height"] == "0.3"
+    assert r.slicer_version.startswith("PrusaSlicer")
+    json.dumps(r.to_dict())
+
+
+def test_plain_box_needs_no_support(prusa):
+    box = _box_vf()
+    r = slice_check(box, box, up=(0, 0, 1), height_mm=15.0, config="fast", timeout=120)
+    assert abs(r.support_mm_before) < 5.0, r.to_dict()
+    assert abs(r.support_mm_after) < 5.0, r.to_dict()
+    assert r.model_mm_before > 100.0
+
+
+def test_accepts_mesh_paths(prusa, tmp_path):
+    import trimesh
+
+    V, F = _gamma_mesh()
+    path = tmp_path / "gamma.stl"
+    trimesh.Trimesh(V, F, process=False).export(path)
+    r = slice_check(str(path), (V, F), height_mm=20.0, config="fast", timeout=120)
+    # identical geometry: identical support, up to slicer noise
+    assert r.support_mm_before > 20.0
+    assert r.support_mm_after == pytest.approx(r.support_mm_before, rel=0.02)
