@@ -140,7 +140,11 @@ def test_report_to_dict_is_json_ready():
     )
     d = r.to_dict()
     assert json.loads(json.dumps(d)) == d
-    assert d["support_mm_before"] == 100.0 and d["reduction_percent"] == 75.0
+    assert d["before"]["support_mm"] == 100.0 and d["after"]["support_mm"] == 25.0
+    assert d["before"]["support_cm3"] == pytest.approx(mm_to_cm3(100.0))
+    assert d["after"]["model_mm"] == 1000.0 and d["before"]["total_mm"] == 1100.0
+    assert d["reduction_percent"] == 75.0
+    assert "support_mm_before" not in d
     assert d["config"]["support-material-threshold"] == "45"
 
 
@@ -262,7 +266,8 @@ def test_arm_up_needs_less_support_than_arm_out(prusa):
     assert r.size_mm_before[2] == pytest.approx(30.0, abs=0.05)
     assert r.config["layer-height"] == "0.3"
     assert r.slicer_version.startswith("PrusaSlicer")
-    json.dumps(r.to_dict())
+    d = json.loads(json.dumps(r.to_dict()))
+    assert d["before"]["support_mm"] == pytest.approx(r.support_mm_before)
 
 
 def test_plain_box_needs_no_support(prusa):
