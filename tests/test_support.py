@@ -1,0 +1,206 @@
+"""Tests for the column support estimator."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from supportless.energies.overhang import overhang_energy
+from supportless.energies.support import support_volume
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+def box(lo, hi):
+    return trimesh.creation.box(bounds=[lo, hi])
+
+
+def union(*ms):
+    u = trimesh.boolean.union(list(ms), engine="manifold")
+    assert u.is_watertight
+    return np.asarray(u.vertices, float), np.asarray(u.faces, np.int64)
+
+
+def t_shape():
+    return union(box([-0.5, -0.5, 0], [0.5, 0.5, 3]), box([-2, -0.5, 2], [2, 0.5, 3]))
+
+
+def arm_over_base():
+    """Base slab on the plate, a stem, and an arm over the base.
+
+    The arm underside (area 3, at z=3) hangs over the base top (z=1), so the
+    columns are 2 long: support 6, while the prism energy counts 3*3 = 9.
+    """
+    return union(box([0, 0, 0], [4, 1, 1]), box([0, 0, 1], [1, 1, 3]), box([0, 0, 3], [4, 1, 4]))
+
+
+def cells_mesh(cells):
+    idx, verts, faces = {}, [], []
+
+    def vid(p):
+        if p not in idx:
+            idx[p] = len(verts)
+            verts.append(p)
+        return idx[p]
+
+    for x, y in cells:
+        a, b, c, d = vid((x, y)), vid((x + 1, y)), vid((x + 1, y + 1)), vid((x, y + 1))
+        faces += [(a, b, c), (a, c, d)]
+    return np.array(verts, float), np.array(faces, np.int64)
+
+
+def vertical_hits(mesh, x, y):
+    """Heights and normal z of all triangles hit by the vertical line at (x, y).
+
+    Plain barycentric point-in-triangle test (independent of the kernel).
+    """
+    T = mesh.triangles
+    a, b, c = T[:, 0], T[:, 1], T[:, 2]
+    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+    ok = np.abs(det) > 1e-300
+    det = np.where(ok, det, 1.0)
+    l1 = ((x - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (y - a[:, 1])) / det
+    l2 = ((b[:, 0] - a[:, 0]) * (y - a[:, 1]) - (x - a[:, 0]) * (b[:, 1] - a[:, 1])) / det
+    l0 = 1.0 - l1 - l2
+    hit = ok & (l0 >= 0) & (l1 >= 0) & (l2 >= 0)
+    z = l0 * a[:, 2] + l1 * b[:, 2] + l2 * c[:, 2]
+    return z[hit], mesh.face_normals[hit, 2]
+
+
+def brute_force_columns(mesh, n, theta=45.0):
+    """Independent reference: per-ray Python sweep along +z.
+
+    Same ray set as the kernel: square cells, ``n`` along the longer side of
+    the footprint, grid centred on the footprint.
+    """
+    lo, hi = mesh.bounds
+    plate = lo[2]
+    tau = np.cos(np.deg2rad(theta))
+    ext = hi[:2] - lo[:2]
+    cell = ext.max() / n
+    cnt = np.maximum(1, np.ceil(ext / cell - 1e-9).astype(int))
+    org = lo[:2] + 0.5 * (ext - cnt * cell)
+    total = 0.0
+    for x in org[0] + (np.arange(cnt[0]) + 0.5) * cell:
+        for y in org[1] + (np.arange(cnt[1]) + 0.5) * cell:
+            z, nz = vertical_hits(mesh, x, y)
+            order = np.argsort(z)
+            below, inside = plate, 0
+            for k in order:
+                if nz[k] < 0:
+                    if inside == 0 and nz[k] < -tau:
+                        total += z[k] - below
+                    inside += 1
+                else:
+                    inside -= 1
+                below = z[k]
+    return total * cell * cell
+
+
+def test_box_on_plate_zero():
+    b = box([0, 0, 0], [1, 2, 3])
+    assert support_volume(b.vertices, b.faces, UP) == 0.0
+    R = trimesh.transformations.rotation_matrix(0.5, [0, 0, 1])
+    b.apply_transform(R)
+    assert support_volume(b.vertices, b.faces, UP) == 0.0
+
+
+def test_t_shape():
+    V, F = t_shape()
+    assert support_volume(V, F, UP) == pytest.approx(6.0, rel=0.01)
+    # same as the prism for a T standing on the plate
+    assert overhang_energy(V, F, UP) == pytest.approx(6.0)
+    # inverted winding
+    assert support_volume(V, F[:, ::-1], UP) == pytest.approx(6.0, rel=0.01)
+    # upside down it stands on its bar
+    assert support_volume(V, F, -UP) == 0.0
+    # rigid motion about up and scaling
+    R = trimesh.transformations.rotation_matrix(0.7, [0.2, 0.1, 1.0])[:3, :3]
+    up = R @ UP
+    V2 = V @ R.T + [1.0, 2.0, 3.0]
+    assert support_volume(V2, F, up) == pytest.approx(6.0, rel=0.02)
+    assert support_volume(2 * V2, F, up) == pytest.approx(48.0, rel=0.02)
+
+
+def test_arm_over_lower_body_stops_at_body_top():
+    V, F = arm_over_base()
+    assert support_volume(V, F, UP) == pytest.approx(6.0, rel=0.01)
+    assert overhang_energy(V, F, UP) == pytest.approx(9.0)
+
+
+@pytest.mark.parametrize("angle,risky", [(30.0, True), (60.0, False)])
+def test_tilted_arm_threshold(angle, risky):
+    stem = box([-0.5, -0.5, 0], [0.5, 0.5, 3])
+    arm = box([0, -0.5, -0.5], [3, 0.5, 0.5])
+    arm.apply_transform(trimesh.transformations.rotation_matrix(-np.deg2rad(angle), [0, 1, 0]))
+    arm.apply_translation([0, 0, 1.5])
+    V, F = union(stem, arm)
+    v = support_volume(V, F, UP)
+    if risky:
+        m = trimesh.Trimesh(V, F, process=False)
+        assert v == pytest.approx(brute_force_columns(m, 128), rel=1e-9)
+        # analytic: only the arm underside (width 1) is supported, down to
+        # the plate, from where it leaves the stem (x = 0.5) to its tip
+        a = np.deg2rad(angle)
+        z0, x0 = 1.5 - 0.5 * np.cos(a), 0.5 * np.sin(a)
+        xe = 3 * np.cos(a) + x0
+        ref = z0 * (xe - 0.5) + np.tan(a) * ((xe - x0) ** 2 - (0.5 - x0) ** 2) / 2
+        # grid error: the 1-wide arm spans ~38 cells (default resolution)
+        assert v == pytest.approx(ref, rel=0.03)
+        assert support_volume(V, F, UP, resolution=1024) == pytest.approx(ref, rel=0.003)
+        assert support_volume(V, F, UP, overhang_angle=25.0) == 0.0
+    else:
+        assert v == 0.0
+
+
+def test_sphere_analytic():
+    r = 1.0
+    s = trimesh.creation.icosphere(subdivisions=5, radius=r)
+    s.apply_translation([0, 0, r])
+    a = r * np.sin(np.pi / 4)
+    # integral over the disc rho < a of the lower-hemisphere height
+    ref = np.pi * r * a**2 - 2 * np.pi / 3 * (r**3 - (r**2 - a**2) ** 1.5)
+    assert support_volume(s.vertices, s.faces, UP) == pytest.approx(ref, rel=0.03)
+    assert overhang_energy(s.vertices, s.faces, UP) == pytest.approx(ref, rel=0.03)
+
+
+def test_bunny_matches_brute_force():
+    m = trimesh.load("/work/shared/data/bunny.obj", process=False)
+    R = trimesh.transformations.rotation_matrix(2.0, [1.0, 0.3, 0.0])
+    m.apply_transform(R)
+    got = support_volume(m.vertices, m.faces, UP, resolution=64)
+    ref = brute_force_columns(m, 64)
+    assert got > 0
+    assert got == pytest.approx(ref, rel=1e-6)
+    # the prism over-estimates (it also counts support resting on the model)
+    assert overhang_energy(m.vertices, m.faces, UP) > got
+
+
+def test_batch_equals_single():
+    V, F = arm_over_base()
+    rng = np.random.default_rng(0)
+    VV = np.stack(
+        [V @ trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3].T for _ in range(4)]
+    )
+    batch = support_volume(VV, F, UP)
+    assert batch.shape == (4,) and batch.dtype == np.float64
+    single = [support_volume(v, F, UP) for v in VV]
+    assert isinstance(single[0], float)
+    np.testing.assert_array_equal(batch, single)
+
+
+def test_2d():
+    up = np.array([0.0, 1.0])
+    V, F = cells_mesh([(1, 0), (1, 1), (1, 2), (0, 2), (2, 2)])
+    assert support_volume(V, F, up) == pytest.approx(4.0, rel=0.02)
+    # 300 cells: pixel boundaries align with the cell edges -> exact
+    assert support_volume(V, F, up, resolution=300) == pytest.approx(4.0, rel=1e-9)
+    assert support_volume(V, F[:, ::-1], up, resolution=300) == pytest.approx(4.0, rel=1e-9)
+    # arm over a base row: columns of height 2 over 2 cells (prism: 2 * 3)
+    V, F = cells_mesh([(0, 0), (1, 0), (2, 0), (0, 1), (0, 2), (0, 3), (1, 3), (2, 3)])
+    assert support_volume(V, F, up, resolution=300) == pytest.approx(4.0, rel=1e-9)
+    assert overhang_energy(V, F, up) == pytest.approx(6.0)
+    # a square on the plate
+    V, F = cells_mesh([(0, 0)])
+    assert support_volume(V, F, up) == 0.0
+    VV = np.stack([V, 2 * V])
+    np.testing.assert_array_equal(support_volume(VV, F, up), [0.0, 0.0])
