@@ -248,9 +248,11 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
     TT = np.ascontiguousarray(tets, np.int64)
     C = np.ascontiguousarray(joints, np.float64)
     BE = np.ascontiguousarray(bones, np.int64)
+    # libigl's boundary_conditions only handles 3D points: lift planar ones to z = 0
+    lift = (lambda X: np.column_stack([X, np.zeros(len(X))])) if TV.shape[1] == 2 else (lambda X: X)
     try:
-        b, bc = igl.boundary_conditions(TV, TT, C, np.zeros(0, np.int64), BE, np.zeros((0, 2), np.int64),
-                                        np.zeros((0, 3), np.int64))
+        b, bc = igl.boundary_conditions(lift(TV), TT, lift(C), np.zeros(0, np.int64), BE,
+                                        np.zeros((0, 2), np.int64), np.zeros((0, 3), np.int64))
     except Exception as exc:
         raise InputError(None, f"cannot fix weights on the bones ({exc})") from None
     if len(bones) == 1:
