@@ -44,8 +44,8 @@ def squares_2d(offsets_and_sizes):
 
 
 def test_default_resolution_documented():
-    assert DEFAULT_RESOLUTION == 128
-    assert "128" in self_intersection_volume.__doc__
+    assert DEFAULT_RESOLUTION == 192
+    assert "192" in self_intersection_volume.__doc__
 
 
 def test_two_axis_aligned_boxes_exact():
@@ -84,7 +84,7 @@ def test_two_spheres_and_convergence():
     ref = exact_overlap(s1, s2)
     V, F = cat(s1, s2)
     vals = [self_intersection_volume(V, F, UP, resolution=r) for r in (16, 32, 64, 128, 256)]
-    assert vals[3] == pytest.approx(ref, rel=0.02)
+    assert self_intersection_volume(V, F, UP) == pytest.approx(ref, rel=0.02)
     diffs = np.abs(np.diff(vals))
     assert diffs[-1] < diffs[0]
     assert diffs[-1] < 1e-3 * ref
@@ -124,13 +124,13 @@ def test_edge_and_vertex_hits_counted_once():
 
 
 def test_arm_rotated_into_body_grows():
-    angles = [0.0, 30.0, 60.0, 90.0, 120.0]
+    angles = [0.0, 30.0, 60.0, 90.0, 120.0]  # 30 deg: a thin sliver, not checked
     vals = []
     for ang in angles:
         body, limb = body_and_arm(ang)
         V, F = cat(body, limb)
         vals.append(self_intersection_volume(V, F, UP))
-        if ang >= 90:
+        if ang >= 60:
             assert vals[-1] == pytest.approx(exact_overlap(body, limb), rel=0.02)
     assert vals[0] == 0.0
     assert all(b > a for a, b in zip(vals, vals[1:]))
@@ -172,21 +172,25 @@ def test_rigid_motion_and_scaling():
 
 
 def test_2d_two_overlapping_squares():
-    V, F = squares_2d([((0, 0), (2, 2)), ((1.5, 0.5), (2, 2))])
+    V, F = squares_2d([((0, 0), (2, 2)), ((1.0, 0.5), (2, 2))])
     up2 = np.array([0.0, 1.0])
-    assert self_intersection_volume(V, F, up2) == pytest.approx(0.5 * 1.5, rel=0.02)
-    assert self_intersection_volume(V, F[:, ::-1], up2) == pytest.approx(0.75, rel=0.02)
+    ov = 1.0 * 1.5
+    assert self_intersection_volume(V, F, up2) == pytest.approx(ov, rel=0.02)
+    assert self_intersection_volume(V, F[:, ::-1], up2) == pytest.approx(ov, rel=0.02)
+    # narrower overlap (width 0.5): converges with resolution
+    V3, F3 = squares_2d([((0, 0), (2, 2)), ((1.5, 0.5), (2, 2))])
+    assert self_intersection_volume(V3, F3, up2, resolution=2000) == pytest.approx(0.75, rel=2e-3)
     # rotating the whole configuration does not change the overlap area
     for t in (0.3, 1.0, 2.5):
         c, s = np.cos(t), np.sin(t)
         R = np.array([[c, -s], [s, c]])
-        assert self_intersection_volume(V @ R.T, F, up2) == pytest.approx(0.75, rel=0.02)
+        assert self_intersection_volume(V @ R.T, F, up2) == pytest.approx(ov, rel=0.02)
     # disjoint squares: 0; a single square: 0
     V2, F2 = squares_2d([((0, 0), (1, 1)), ((1.5, 0), (1, 1))])
     assert self_intersection_volume(V2, F2, up2) == 0.0
     # batch
     VV = np.stack([V, V + [1.0, 2.0], 2 * V])
-    np.testing.assert_allclose(self_intersection_volume(VV, F, up2), [0.75, 0.75, 3.0], rtol=0.02)
+    np.testing.assert_allclose(self_intersection_volume(VV, F, up2), [ov, ov, 4 * ov], rtol=0.02)
 
 
 def test_2d_three_layers_counted_once():

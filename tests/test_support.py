@@ -137,15 +137,16 @@ def test_tilted_arm_threshold(angle, risky):
     v = support_volume(V, F, UP)
     if risky:
         m = trimesh.Trimesh(V, F, process=False)
-        assert v == pytest.approx(brute_force_columns(m, 128), rel=1e-9)
+        v128 = support_volume(V, F, UP, resolution=128)
+        assert v128 == pytest.approx(brute_force_columns(m, 128), rel=1e-9)
         # analytic: only the arm underside (width 1) is supported, down to
         # the plate, from where it leaves the stem (x = 0.5) to its tip
         a = np.deg2rad(angle)
         z0, x0 = 1.5 - 0.5 * np.cos(a), 0.5 * np.sin(a)
         xe = 3 * np.cos(a) + x0
         ref = z0 * (xe - 0.5) + np.tan(a) * ((xe - x0) ** 2 - (0.5 - x0) ** 2) / 2
-        # grid error: the 1-wide arm spans ~38 cells (default resolution)
-        assert v == pytest.approx(ref, rel=0.03)
+        # grid error: the 1-wide arm spans ~57 cells (default resolution)
+        assert v == pytest.approx(ref, rel=0.02)
         assert support_volume(V, F, UP, resolution=1024) == pytest.approx(ref, rel=0.003)
         assert support_volume(V, F, UP, overhang_angle=25.0) == 0.0
     else:

@@ -30,7 +30,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+#: Default number of square ray cells along the longer side of the footprint.
+#: At 192 the relative error on the test shapes (rotated overlapping boxes,
+#: overlapping spheres, a limb swung into a body, tilted-arm support) is at
+#: most 1.8 %; in general it is about one cell over the feature width.
+DEFAULT_RESOLUTION = 192
+
 __all__ = [
+    "DEFAULT_RESOLUTION",
     "prepare",
     "plane_basis",
     "to_frame",
@@ -411,14 +418,46 @@ def _pose3(X, F, orient, R, tau):
             o3x, o3y, d3x, d3y, f3, t3 = _edge(ax, ay, cx, cy)
         for j in range(j_lo, j_hi + 1):
             py = w0 + (j + 0.5) * cell
-            for i in range(i_lo, i_hi + 1):
+            # Approximate span of the row inside the triangle; pixels near
+            # either end get the exact (tie-broken) test, pixels more than a
+            # cell inside are accepted directly.  Edges with dy == 0 do not
+            # depend on px: one exact test decides the whole row.
+            xl = lo_u
+            xr = hi_u
+            empty = False
+            if d1y == 0.0:
+                empty = empty or not _inside(o1x, o1y, d1x, d1y, f1, t1, lo_u, py)
+            elif f1 * d1y > 0.0:
+                xr = min(xr, o1x + d1x * (py - o1y) / d1y)
+            else:
+                xl = max(xl, o1x + d1x * (py - o1y) / d1y)
+            if d2y == 0.0:
+                empty = empty or not _inside(o2x, o2y, d2x, d2y, f2, t2, lo_u, py)
+            elif f2 * d2y > 0.0:
+                xr = min(xr, o2x + d2x * (py - o2y) / d2y)
+            else:
+                xl = max(xl, o2x + d2x * (py - o2y) / d2y)
+            if d3y == 0.0:
+                empty = empty or not _inside(o3x, o3y, d3x, d3y, f3, t3, lo_u, py)
+            elif f3 * d3y > 0.0:
+                xr = min(xr, o3x + d3x * (py - o3y) / d3y)
+            else:
+                xl = max(xl, o3x + d3x * (py - o3y) / d3y)
+            if empty:
+                continue
+            ia = int(np.ceil((xl - u0) / cell - 0.5))
+            ib = int(np.floor((xr - u0) / cell - 0.5))
+            k0 = max(i_lo, ia - 1)
+            k1 = min(i_hi, ib + 1)
+            for i in range(k0, k1 + 1):
                 px = u0 + (i + 0.5) * cell
-                if not _inside(o1x, o1y, d1x, d1y, f1, t1, px, py):
-                    continue
-                if not _inside(o2x, o2y, d2x, d2y, f2, t2, px, py):
-                    continue
-                if not _inside(o3x, o3y, d3x, d3y, f3, t3, px, py):
-                    continue
+                if i <= ia or i >= ib:
+                    if not _inside(o1x, o1y, d1x, d1y, f1, t1, px, py):
+                        continue
+                    if not _inside(o2x, o2y, d2x, d2y, f2, t2, px, py):
+                        continue
+                    if not _inside(o3x, o3y, d3x, d3y, f3, t3, px, py):
+                        continue
                 if m == pix.shape[0]:
                     pix, zz, cc = _grow(pix, zz, cc)
                 pix[m] = j * nx + i

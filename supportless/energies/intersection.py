@@ -10,12 +10,10 @@ is at least 2 is summed over rays and multiplied by the cell area.
 
 from __future__ import annotations
 
-from ._raycast import prepare, ray_grid
+from ._raycast import DEFAULT_RESOLUTION, prepare, ray_grid
 
 __all__ = ["self_intersection_volume", "DEFAULT_RESOLUTION"]
 
-#: Default number of ray cells along the longer footprint side.
-DEFAULT_RESOLUTION = 128
 
 
 def self_intersection_volume(vertices, faces, up, resolution=DEFAULT_RESOLUTION):
@@ -33,11 +31,13 @@ def self_intersection_volume(vertices, faces, up, resolution=DEFAULT_RESOLUTION)
         Printing direction (normalised internally).
     resolution : int
         Number of square ray cells along the longer side of the footprint
-        (default 128, i.e. up to 128 x 128 rays in 3D, 128 rays in 2D).
+        (default 192, i.e. up to 192 x 192 rays in 3D, 192 rays in 2D).
         Rays start at cell centres; a ray through a shared edge or vertex is
         counted once (half-open rule with symbolic perturbation).  At the
         default the error on the test shapes (overlapping boxes, overlapping
-        spheres, squares) is well below 2 %.
+        spheres, a limb swung into a body, squares) is below 2 % (max measured
+        1.8 %); in general the error is about one cell over the width of the
+        overlapping region.  Cost grows with ``resolution**2``.
 
     Returns
     -------

@@ -19,12 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._raycast import prepare, ray_grid
+from ._raycast import DEFAULT_RESOLUTION, prepare, ray_grid
 
 __all__ = ["support_volume", "DEFAULT_RESOLUTION"]
 
-#: Default number of ray cells along the longer footprint side.
-DEFAULT_RESOLUTION = 128
 
 
 def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_RESOLUTION):
@@ -44,7 +42,8 @@ def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_
         45); a face is risky when ``n . up < -cos(theta)``.
     resolution : int
         Number of square ray cells along the longer side of the footprint
-        (default 128).
+        (default 192; error below 2 % on the test shapes, about one cell
+        over the width of the supported region in general).
 
     Returns
     -------
