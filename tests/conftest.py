@@ -89,3 +89,88 @@ def _box_surface(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0)):
 def box_surface():
     """A function ``(lo, hi) -> (V, F)``: the closed surface of an axis-aligned box."""
     return _box_surface
+
+
+@pytest.fixture(scope="session")
+def bad_inputs(tmp_path_factory, branch_files, branch_rig, box_surface) -> dict:
+    """Bad models, one per user error, shared by the API and the CLI tests.
+
+    Returns ``{case: (model, kwargs, culprit, fragments)}``: ``model`` is the
+    mesh path, ``kwargs`` are ``skeleton`` / ``tets`` / ``weights`` paths,
+    ``culprit`` is the file the message must name and ``fragments`` are
+    substrings the message must contain.
+    """
+    from supportless.io import write_dmat, write_tet_mesh
+
+    d = tmp_path_factory.mktemp("bad-inputs")
+    V, F, J, B = (branch_files[k] for k in ("V", "F", "joints", "bones"))
+    good_tgf = branch_files["skeleton"]
+    cases = {}
+
+    garbage = d / "garbage.stl"
+    garbage.write_bytes(bytes(range(256)) * 4)
+    cases["garbage mesh"] = (garbage, {"skeleton": good_tgf}, garbage, ["no triangles"])
+    garbage_ply = d / "garbage.ply"
+    garbage_ply.write_text("this is not a mesh\n")
+    cases["garbage ply"] = (garbage_ply, {"skeleton": good_tgf}, garbage_ply, ["cannot read as PLY"])
+    garbage_tgf = d / "garbage.tgf"
+    garbage_tgf.write_text("hello world\n")
+    cases["garbage skeleton"] = (branch_files["mesh"], {"skeleton": garbage_tgf}, garbage_tgf,
+                                 ["line 1", "joint"])
+
+    unknown = d / "model.xyz"
+    unknown.write_text("0 0 0\n")
+    cases["unknown extension"] = (unknown, {"skeleton": good_tgf}, unknown, ["unknown mesh format", ".xyz"])
+
+    open_mesh = d / "open.obj"
+    sl.write_mesh(open_mesh, V, F[1:])  # one face removed: a hole with 3 boundary edges
+    cases["not closed"] = (open_mesh, {"skeleton": good_tgf}, open_mesh, ["not closed", "3 boundary edges"])
+
+    V1, F1 = box_surface((0, 0, 0), (1, 1, 1))
+    V2, F2 = box_surface((1, 1, 0), (2, 2, 1))  # shares the edge x = y = 1 with the first box
+    nonmanifold = d / "two-boxes.obj"
+    sl.write_mesh(nonmanifold, np.vstack([V1, V2]), np.vstack([F1, F2 + 8]))
+    box_tgf = d / "two-boxes.tgf"
+    sl.write_tgf(box_tgf, [[0.2, 0.5, 0.5], [0.8, 0.5, 0.5]], [[0, 1]])
+    cases["not manifold"] = (nonmanifold, {"skeleton": box_tgf}, nonmanifold, ["not manifold", "1 edges"])
+
+    outside = d / "outside.tgf"
+    sl.write_tgf(outside, np.vstack([J, [[50.0, 50.0, 50.0]]]), np.vstack([B, [[3, 4]]]))
+    cases["joint outside"] = (branch_files["mesh"], {"skeleton": outside}, outside, ["joint 5", "outside"])
+
+    out_of_range = d / "out-of-range.tgf"
+    out_of_range.write_text("1 0 2 0\n2 0 20 0\n#\n1 2\n2 9\n#\n")
+    cases["bone out of range"] = (branch_files["mesh"], {"skeleton": out_of_range}, out_of_range,
+                                  ["bone 2", "out of range 1..2"])
+
+    no_bones = d / "no-bones.tgf"
+    no_bones.write_text("1 0 2 0\n2 0 20 0\n#\n#\n")
+    cases["skeleton without bones"] = (branch_files["mesh"], {"skeleton": no_bones}, no_bones, ["no bones"])
+    empty = d / "empty.tgf"
+    empty.write_text("")
+    cases["empty skeleton file"] = (branch_files["mesh"], {"skeleton": empty}, empty, ["no joints"])
+
+    tets = d / "branch.mesh"
+    write_tet_mesh(tets, branch_rig.tet_vertices, branch_rig.tets)
+    t, m = branch_rig.tet_weights.shape
+    wrong = d / "wrong-shape.dmat"
+    write_dmat(wrong, np.full((t, m + 1), 1.0 / (m + 1)))
+    cases["weights of the wrong shape"] = (branch_files["mesh"], {"skeleton": good_tgf, "tets": tets,
+                                                                  "weights": wrong}, wrong,
+                                           [f"{t}x{m + 1}", f"{t}x{m} was expected"])
+
+    missing = d / "missing.stl"
+    cases["missing mesh"] = (missing, {"skeleton": good_tgf}, missing, ["no such file"])
+    missing_tgf = d / "missing.tgf"
+    cases["missing skeleton"] = (branch_files["mesh"], {"skeleton": missing_tgf}, missing_tgf, ["no such file"])
+    return cases
+
+
+@pytest.fixture(params=[
+    "garbage mesh", "garbage ply", "garbage skeleton", "unknown extension", "not closed", "not manifold",
+    "joint outside", "bone out of range", "skeleton without bones", "empty skeleton file",
+    "weights of the wrong shape", "missing mesh", "missing skeleton",
+])
+def bad_case(request, bad_inputs):
+    """One bad input per test: ``(model, kwargs, culprit, fragments)`` from :func:`bad_inputs`."""
+    return bad_inputs[request.param]

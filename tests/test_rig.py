@@ -1,0 +1,260 @@
+"""Rig preparation: volume mesh, bounded biharmonic weights, validation, cache, 2D rigs."""
+
+import shutil
+import time
+
+import igl
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless import kinematics as kin
+from supportless.io import write_dmat, write_tet_mesh
+from supportless.rig import signed_volume
+
+
+@pytest.fixture(scope="module")
+def woody_rig():
+    return sl.prepare_rig(*sl.demo_figure("woody2d"), up="y", name="woody2d")
+
+
+@pytest.fixture(params=["branch", "tpose", "woody2d", "bunny"])
+def any_rig(request):
+    return request.getfixturevalue({"branch": "branch_rig", "tpose": "tpose_rig", "woody2d": "woody_rig",
+                                    "bunny": "bunny_rig"}[request.param])
+
+
+def _bone_samples(rig, tol=1e-9):
+    """{bone: indices of tet vertices on its segment}, without joints shared with other bones."""
+    TV, J, B = rig.tet_vertices, rig.joints, rig.bones
+    scale = np.ptp(TV, axis=0).max()
+    uses = np.bincount(B.ravel(), minlength=len(J))
+    shared = J[uses > 1]
+    out = {}
+    for b, (i, j) in enumerate(B):
+        a, e = J[i], J[j]
+        t = np.clip((TV - a) @ (e - a) / ((e - a) @ (e - a)), 0.0, 1.0)
+        on = np.linalg.norm(TV - (a + t[:, None] * (e - a)), axis=1) <= tol * scale
+        near_shared = (np.linalg.norm(TV[:, None, :] - shared[None], axis=2) <= tol * scale).any(1)
+        out[b] = np.flatnonzero(on & ~near_shared)
+    return out
+
+
+# ---------------------------------------------------------------------- weights
+
+
+def test_weights_are_a_partition_of_unity_in_0_1(any_rig):
+    W = any_rig.tet_weights
+    assert W.shape == (len(any_rig.tet_vertices), any_rig.bone_count)
+    assert W.min() >= -1e-9 and W.max() <= 1 + 1e-9
+    np.testing.assert_allclose(W.sum(1), 1.0, rtol=0, atol=1e-9)
+    assert any_rig.weights.shape == (len(any_rig.vertices), any_rig.bone_count)
+
+
+def test_each_bone_has_weight_one_on_its_samples(any_rig):
+    W = any_rig.tet_weights
+    for b, idx in _bone_samples(any_rig).items():
+        assert len(idx) >= 3, f"bone {b} has only {len(idx)} samples in the volume mesh"
+        np.testing.assert_allclose(W[idx, b], 1.0, rtol=0, atol=1e-9, err_msg=f"bone {b}")
+
+
+def test_volume_mesh_fills_the_surface(any_rig):
+    rig = any_rig
+    n = len(rig.vertices)
+    assert np.array_equal(rig.tet_vertices[:n], rig.vertices)
+    assert rig.tets.min() >= 0 and rig.tets.max() < len(rig.tet_vertices)
+    enclosed = signed_volume(rig.vertices, rig.faces)
+    assert enclosed > 0
+    if rig.dim == 3:
+        vol = np.asarray(igl.volume(rig.tet_vertices, rig.tets)).ravel()
+        assert np.all(vol > 0)
+        assert abs(vol.sum() - enclosed) <= 1e-6 * enclosed
+    else:
+        area = signed_volume(rig.tet_vertices, rig.tets)  # sum of signed triangle areas
+        assert abs(area - enclosed) <= 1e-6 * enclosed
+
+
+def test_prepared_rig_shapes(tpose_rig):
+    rig = tpose_rig
+    assert rig.dim == 3 and rig.bone_count == 15 and rig.joints.shape == (16, 3)
+    assert rig.tets.shape[1] == 4 and rig.faces.dtype == np.int64
+    np.testing.assert_array_equal(rig.up, [0.0, 1.0, 0.0])
+    assert rig.lbs.shape == (len(rig.vertices), 15 * 4)
+
+
+# ----------------------------------------------------------- forests and order
+
+
+def test_forest_rig(branch_files):
+    """Two separate root bones: the post (with its top) and a free-standing arm bone."""
+    V, F, J = branch_files["V"], branch_files["F"], branch_files["joints"]
+    joints = np.vstack([J, [[2.0, 20.0, 0.0]]])  # 4: start of the arm, not connected to the post
+    bones = np.array([[0, 1], [1, 3], [4, 2]])
+    rig = sl.prepare_rig(V, F, joints, bones, up="y")
+    assert rig.parents.tolist() == [-1, 0, -1]
+    np.testing.assert_allclose(rig.tet_weights.sum(1), 1.0, atol=1e-9)
+    a = rig.rest_angles()
+    a[2] = [0.0, 0.0, 0.5]  # lift the arm about its own root
+    posed = rig.pose(a)
+    P = rig.posed_joints(a)
+    np.testing.assert_allclose(P[[0, 1, 3, 4]], joints[[0, 1, 3, 4]], atol=1e-12)
+    assert P[2, 1] > joints[2, 1] + 5
+    post = rig.weights[:, 2] == 0
+    np.testing.assert_allclose(posed[post], rig.vertices[post], atol=1e-12)
+
+
+def test_bones_in_any_order_in_prepare_rig(branch_files, branch_rig):
+    """A shuffled skeleton gives the same weights, column-permuted (the same tet mesh is used)."""
+    perm = np.array([2, 0, 1])
+    rig = sl.prepare_rig(branch_files["V"], branch_files["F"], branch_files["joints"], branch_files["bones"][perm],
+                         up="y", tet_mesh=(branch_rig.tet_vertices, branch_rig.tets))
+    np.testing.assert_allclose(rig.tet_weights, branch_rig.tet_weights[:, perm], atol=1e-6)
+    a = np.random.default_rng(0).uniform(-0.5, 0.5, (3, 3))
+    np.testing.assert_allclose(rig.pose(a[perm]), branch_rig.pose(a), atol=1e-5)
+
+
+# ------------------------------------------------------------ precomputed input
+
+
+def test_precomputed_tets_and_weights(tmp_path, branch_files, branch_rig):
+    tets, weights = tmp_path / "branch.mesh", tmp_path / "branch.dmat"
+    write_tet_mesh(tets, branch_rig.tet_vertices, branch_rig.tets)
+    write_dmat(weights, branch_rig.tet_weights)
+    rig = sl.load_rig(branch_files["mesh"], branch_files["skeleton"], tets=tets, weights=weights,
+                      cache_dir=tmp_path / "cache")
+    # the STL may list vertices in another order: match them by position
+    order = np.lexsort(rig.vertices.T)
+    ref = np.lexsort(branch_rig.vertices.T)
+    np.testing.assert_allclose(rig.vertices[order], branch_rig.vertices[ref], atol=1e-5)
+    np.testing.assert_allclose(rig.weights[order], branch_rig.weights[ref], atol=1e-9)
+    assert len(rig.tets) == len(branch_rig.tets)
+
+
+def test_weights_without_tets_are_rejected(tmp_path, branch_files, branch_rig):
+    weights = tmp_path / "w.dmat"
+    write_dmat(weights, branch_rig.tet_weights)
+    with pytest.raises(sl.InputError, match="--tets"):
+        sl.load_rig(branch_files["mesh"], branch_files["skeleton"], weights=weights, cache=False)
+
+
+# ------------------------------------------------------------------ bad inputs
+
+
+def test_bad_input_raises_a_clear_input_error(bad_case):
+    model, kwargs, culprit, fragments = bad_case
+    with pytest.raises(sl.InputError) as info:
+        sl.load_rig(model, up="y", cache=False, **kwargs)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(f"{culprit}: "), message
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+def test_prepare_rig_rejects_bad_arrays(branch_files):
+    V, F, J, B = (branch_files[k] for k in ("V", "F", "joints", "bones"))
+    with pytest.raises(sl.InputError, match="no bones"):
+        sl.prepare_rig(V, F, J, np.zeros((0, 2), np.int64))
+    with pytest.raises(sl.InputError, match="out of range"):
+        sl.prepare_rig(V, F, J, np.array([[0, 7]]))
+    with pytest.raises(sl.InputError, match="3 boundary edges"):
+        sl.prepare_rig(V, F[1:], J, B)
+    with pytest.raises(sl.InputError, match="up direction"):
+        sl.prepare_rig(V, F, J, B, up="sideways")
+
+
+def test_inward_surface_is_flipped(branch_files, branch_rig):
+    V, F, J, B = (branch_files[k] for k in ("V", "F", "joints", "bones"))
+    rig = sl.prepare_rig(V, F[:, ::-1], J, B, tet_mesh=(branch_rig.tet_vertices, branch_rig.tets),
+                         tet_weights=branch_rig.tet_weights)
+    assert signed_volume(rig.vertices, rig.faces) > 0
+
+
+# ------------------------------------------------------------------------ cache
+
+
+def test_second_load_comes_from_the_cache(tmp_path):
+    t0 = time.perf_counter()
+    first = sl.load_rig("demo:branch", up="y", cache_dir=tmp_path)
+    t1 = time.perf_counter()
+    second = sl.load_rig("demo:branch", up="y", cache_dir=tmp_path)
+    t2 = time.perf_counter()
+    assert first.info["from_cache"] is False and second.info["from_cache"] is True
+    for name in ("vertices", "faces", "joints", "bones", "tet_vertices", "tets", "tet_weights", "up"):
+        a, b = getattr(first, name), getattr(second, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert t2 - t1 < (t1 - t0) / 3, (t1 - t0, t2 - t1)
+    # one finished cache file, no temporary leftovers
+    assert [p.suffix for p in tmp_path.iterdir()] == [".npz"]
+    assert second.name == "branch"
+
+
+def test_changed_input_misses_the_cache(tmp_path, branch_files):
+    mesh = tmp_path / "branch.stl"
+    shutil.copy(branch_files["mesh"], mesh)
+    sl.write_tgf(tmp_path / "branch.tgf", branch_files["joints"], branch_files["bones"])
+    cache = tmp_path / "cache"
+    assert sl.load_rig(mesh, cache_dir=cache).info["from_cache"] is False
+    assert sl.load_rig(mesh, cache_dir=cache).info["from_cache"] is True
+    moved = branch_files["joints"].copy()
+    moved[3, 1] -= 1.0  # post top one unit lower
+    sl.write_tgf(tmp_path / "branch.tgf", moved, branch_files["bones"])
+    rig = sl.load_rig(mesh, cache_dir=cache)
+    assert rig.info["from_cache"] is False
+    np.testing.assert_array_equal(rig.joints, moved)
+    # another printing direction is another rig too
+    assert sl.load_rig(mesh, up="z", cache_dir=cache).info["from_cache"] is False
+    assert len(list(cache.glob("*.npz"))) == 3
+
+
+def test_damaged_cache_entry_is_recomputed(tmp_path):
+    sl.load_rig("demo:branch", cache_dir=tmp_path)
+    (entry,) = tmp_path.glob("*.npz")
+    entry.write_bytes(b"not an npz file")
+    rig = sl.load_rig("demo:branch", cache_dir=tmp_path)
+    assert rig.info["from_cache"] is False
+    assert sl.load_rig("demo:branch", cache_dir=tmp_path).info["from_cache"] is True
+
+
+def test_no_cache_writes_nothing(tmp_path):
+    rig = sl.load_rig("demo:branch", cache=False, cache_dir=tmp_path / "c")
+    assert rig.info["from_cache"] is False
+    assert not (tmp_path / "c").exists()
+
+
+# --------------------------------------------------------------------------- 2D
+
+
+def test_woody2d_is_a_2d_rig(woody_rig):
+    rig = woody_rig
+    assert rig.dim == 2
+    assert rig.vertices.shape[1] == 2 and rig.joints.shape == (12, 2) and rig.tet_vertices.shape[1] == 2
+    assert rig.tets.shape[1] == 3
+    np.testing.assert_array_equal(rig.up, [0.0, 1.0])
+    T = rig.transforms(rig.rest_angles())
+    assert T.shape == (11, 2, 3)
+
+
+def test_woody2d_poses_rotate_in_the_plane(woody_rig):
+    rig = woody_rig
+    b = 3  # chest -> left elbow
+    root, tip = rig.bones[b]
+    a = rig.rest_angles()
+    a[b, 2] = np.pi / 2
+    P = rig.posed_joints(a)
+    d = rig.joints[tip] - rig.joints[root]
+    np.testing.assert_allclose(P[tip], rig.joints[root] + [-d[1], d[0]], atol=1e-12)  # counter-clockwise
+    posed = rig.pose(a)
+    assert posed.shape == rig.vertices.shape
+    # the first two angles do nothing in 2D
+    a2 = a.copy()
+    a2[:, :2] = np.random.default_rng(0).uniform(-1, 1, (rig.bone_count, 2))
+    np.testing.assert_array_equal(rig.pose(a2), posed)
+    # the same rotation of the three root bones (spine, legs) turns the figure rigidly about the hips
+    roots = np.flatnonzero(rig.parents < 0)
+    assert sorted(rig.bones[roots, 0].tolist()) == [0, 0, 0]
+    a3 = rig.rest_angles()
+    a3[roots, 2] = 0.3
+    R = kin.planar_rotation(0.3)
+    hips = rig.joints[0]
+    np.testing.assert_allclose(rig.pose(a3), (rig.vertices - hips) @ R.T + hips, atol=1e-9)
