@@ -55,7 +55,8 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
                    particles: int = 200, iterations: int = 120, rng: np.random.Generator | None = None,
                    inertia: float = 0.7298, cognitive: float = 1.49618, social: float = 1.49618,
                    initial: np.ndarray | None = None,
-                   callback: Callable[[int, np.ndarray, float], bool | None] | None = None) -> SwarmResult:
+                   callback: Callable[[int, np.ndarray, float], bool | None] | None = None,
+                   feasible: Callable[[np.ndarray], bool] | None = None) -> SwarmResult:
     """Minimise ``f`` over a box with a particle swarm.
 
     Parameters
@@ -79,6 +80,11 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
     callback : callable, optional
         ``callback(iteration, best_x, best_value)`` after each iteration;
         returning ``False`` stops the search.
+    feasible : callable, optional
+        ``feasible(x) -> bool`` for a hard constraint too expensive to test on
+        every particle: it is asked only about positions that would become the
+        swarm's best (best first), and a rejected position counts as +inf. The
+        initial particles given in ``initial`` are taken as feasible.
 
     Returns
     -------
@@ -98,6 +104,10 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
     Vel = span * rng.uniform(-1.0, 1.0, (particles, k)) * 0.25
     values = np.asarray(f(X), np.float64)
     evaluations = particles
+    n_initial = 0 if initial is None else len(initial)
+    if feasible is not None:
+        g_f = values[:n_initial].min() if n_initial else np.inf
+        _reject_infeasible(values, X, g_f, feasible, skip=n_initial)
     best_X, best_f = X.copy(), values.copy()
     g = int(np.argmin(best_f))
     g_x, g_f = best_X[g].copy(), float(best_f[g])
@@ -111,6 +121,8 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
             X = np.clip(X + Vel, lower, upper)
             values = np.asarray(f(X), np.float64)
             evaluations += particles
+            if feasible is not None:
+                _reject_infeasible(values, X, g_f, feasible)
             improved = values < best_f
             best_X[improved] = X[improved]
             best_f[improved] = values[improved]
@@ -124,6 +136,21 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
     except KeyboardInterrupt:
         interrupted = True
     return SwarmResult(g_x, g_f, np.asarray(history), evaluations, interrupted)
+
+
+def _reject_infeasible(values, X, threshold, feasible, skip=0):
+    """Set to +inf the values of infeasible positions that would beat ``threshold``.
+
+    Candidates are tested best first and testing stops at the first feasible
+    one: only it can become the swarm's best in this round.
+    """
+    order = np.argsort(values, kind="stable")
+    for i in order:
+        if values[i] >= threshold:
+            break
+        if i < skip or feasible(X[i]):
+            return
+        values[i] = np.inf
 
 
 # --------------------------------------------------------------------------- #
@@ -248,7 +275,7 @@ def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
 def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int = 0, max_angle: float = 30.0,
              overhang_angle: float = 45.0, w_arap: float | None = None, w_overhang: float | None = None,
              w_intersect: float | None = None, overhang_model: str = "prism", fix=None, free=None,
-             preset: str = "standard", objective: Objective | None = None,
+             preset: str = "standard", objective: Objective | None = None, exact_intersections: bool = True,
              callback: Callable[[int, dict], bool | None] | None = None) -> PoseResult:
     """Find a pose of ``rig`` that needs less support, with a particle swarm.
 
@@ -272,6 +299,12 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         Swarm coefficients, see :data:`PSO_PRESETS`.
     objective : Objective, optional
         Use this objective instead of building one from the weights.
+    exact_intersections : bool
+        Reject any pose whose surface has intersecting triangle pairs by
+        CGAL's exact test (3D), checked on every candidate for the swarm's
+        best. The ray-cast intersection energy steers the search away from
+        overlaps; this makes sure thin ones it cannot see never reach the
+        output.
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
         (normalised terms of the best pose) and ``angles``; return ``False`` to
@@ -313,12 +346,20 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
                                  "iterations": iterations})
         return None
 
+    feasible = None
+    if exact_intersections and rig.dim == 3:
+        from .report import intersecting_face_pairs
+
+        def feasible(x):
+            return intersecting_face_pairs(rig.pose(to_angles(x[None])[0]), rig.faces) == 0
+
     if k == 0:
         swarm = SwarmResult(np.zeros(0), float(f(np.zeros((1, 0)))[0]), np.zeros(1), 1)
     else:
         swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=particles,
                                iterations=iterations, rng=np.random.default_rng(seed),
-                               initial=np.zeros((1, k)), callback=on_iteration, **PSO_PRESETS[preset])
+                               initial=np.zeros((1, k)), callback=on_iteration, feasible=feasible,
+                               **PSO_PRESETS[preset])
     angles = to_angles(swarm.x[None])[0]
     posed = place_on_plate(rig.pose(angles), rig.up)
     terms = {key: float(v) for key, v in objective.terms(angles).items()}

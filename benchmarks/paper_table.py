@@ -1,0 +1,126 @@
+"""The paper's experiment on every model, checked with PrusaSlicer: a Markdown table.
+
+For ../shared/data/bunny.obj and bb-bunny.obj (when present) and the built-in
+3D figures, run ``optimize`` with the paper's settings (200 particles x 120
+iterations), slice the rest and the posed mesh with PrusaSlicer at 60 mm tall,
+and print one table row per model: support by the prism and column estimates
+and by PrusaSlicer, before and after, the reductions, E_arap, self-intersection
+and runtime.
+
+    python benchmarks/paper_table.py [--out benchmarks/RESULTS.md] [--particles 200] [--iterations 120]
+        [--models bunny bb-bunny tpose branch] [--w-arap W] [--overhang-model prism|column] [--free all]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import supportless as sl
+from supportless.slicer import find_prusa_slicer, slice_check
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT.parent / "shared" / "data"
+
+
+def load(name: str):
+    if name in sl.DEMO_FIGURES:
+        return sl.load_rig(f"demo:{name}")
+    return sl.load_rig(DATA / f"{name}.obj", DATA / f"{name}.tgf", up="y")
+
+
+def run(name: str, args) -> dict:
+    rig = load(name)
+    t0 = time.perf_counter()
+    res = sl.optimize(rig, particles=args.particles, iterations=args.iterations, seed=args.seed,
+                      w_arap=args.w_arap, w_overhang=args.w_overhang, w_intersect=args.w_intersect,
+                      overhang_model=args.overhang_model, free=args.free, fix=args.fix, max_angle=args.max_angle)
+    runtime = time.perf_counter() - t0
+    rep = res.report
+    row = {"model": name, "runtime_s": runtime, "report": rep}
+    if find_prusa_slicer() and rig.dim == 3:
+        sc = slice_check((rig.vertices, rig.faces), (res.vertices, rig.faces), up=rig.up, height_mm=60.0)
+        row["slicer"] = sc.to_dict()
+    if args.keep:
+        out = Path(args.keep)
+        out.mkdir(parents=True, exist_ok=True)
+        sl.write_mesh(out / f"{name}-posed.stl", res.vertices, rig.faces)
+        (out / f"{name}-report.json").write_text(json.dumps(rep, indent=1))
+        from supportless.report import write_pictures
+
+        write_pictures(out / name, rig, res)
+    return row
+
+
+def fmt(x, spec=".3g"):
+    return "–" if x is None else format(x, spec)
+
+
+def table(rows: list[dict], args) -> str:
+    head = ("| model | prism before → after | column before → after | PrusaSlicer support mm before → after "
+            "| reduction prism / column / PrusaSlicer | E_arap / volume | self-intersection (vol / exact pairs) "
+            "| search time |")
+    lines = [head, "|" + "---|" * 8]
+    for r in rows:
+        b, a, red = r["report"]["before"], r["report"]["after"], r["report"]["reduction_percent"]
+        s = r.get("slicer")
+        slicer_cell = f"{s['before']['support_mm']:.0f} → {s['after']['support_mm']:.0f}" if s else "not run"
+        slicer_red = fmt(s["reduction_percent"], ".1f") + " %" if s else "–"
+        lines.append(
+            f"| {r['model']} | {fmt(b['overhang_prism'])} → {fmt(a['overhang_prism'])} "
+            f"| {fmt(b['support_column'])} → {fmt(a['support_column'])} | {slicer_cell} "
+            f"| {fmt(red['overhang_prism'], '.1f')} % / {fmt(red['support_column'], '.1f')} % / {slicer_red} "
+            f"| {a['terms']['arap']:.4f} | {a['self_intersection_volume']:.2g} / {a['intersecting_face_pairs']} "
+            f"| {r['runtime_s']:.1f} s |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="+", default=["bunny", "bb-bunny", "tpose", "branch"])
+    p.add_argument("--particles", type=int, default=200)
+    p.add_argument("--iterations", type=int, default=120)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--max-angle", type=float, default=30.0)
+    p.add_argument("--w-arap", type=float, default=None)
+    p.add_argument("--w-overhang", type=float, default=None)
+    p.add_argument("--w-intersect", type=float, default=None)
+    p.add_argument("--overhang-model", default="prism", choices=["prism", "column"])
+    p.add_argument("--free", nargs="*", default=None)
+    p.add_argument("--fix", nargs="*", default=None)
+    p.add_argument("--out", default=None, help="Write the Markdown table here (default: print only).")
+    p.add_argument("--keep", default=None, help="Folder for posed meshes, reports and pictures.")
+    args = p.parse_args(argv)
+    models = [m for m in args.models if m in sl.DEMO_FIGURES or (DATA / f"{m}.obj").is_file()]
+    skipped = sorted(set(args.models) - set(models))
+    rows = []
+    for m in models:
+        print(f"running {m} ...", file=sys.stderr, flush=True)
+        rows.append(run(m, args))
+        print(table(rows[-1:], args).splitlines()[-1], file=sys.stderr, flush=True)
+    settings = {k: v for k, v in vars(args).items() if k not in ("out", "keep", "models")}
+    text = "\n".join([
+        f"## Paper experiment — {dt.date.today().isoformat()}",
+        "",
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}. "
+        f"Settings: {json.dumps(settings)}; defaults otherwise. "
+        "PrusaSlicer: its own default print settings, 60 mm tall, support = filament with − without supports. "
+        + (f"Skipped (missing): {', '.join(skipped)}." if skipped else ""),
+        "Command: `python benchmarks/paper_table.py " + " ".join(argv if argv is not None else sys.argv[1:]) + "`",
+        "",
+        table(rows, args),
+        "",
+    ])
+    print(text)
+    if args.out:
+        Path(args.out).write_text(text)
+
+
+if __name__ == "__main__":
+    main()
