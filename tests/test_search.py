@@ -153,3 +153,18 @@ def test_place_on_plate():
     V = np.array([[0.0, 2.0, 0.0], [1.0, 5.0, 1.0]])
     out = place_on_plate(V, np.array([0.0, 1.0, 0.0]))
     np.testing.assert_allclose(out[:, 1], [0.0, 3.0])
+
+
+def test_swarm_feasibility_constraint_is_never_violated_by_the_result():
+    # unconstrained minimum at x0 = 0.3; the constraint forbids x0 > 0
+    checked = []
+
+    def feasible(x):
+        checked.append(x.copy())
+        return x[0] <= 0.0
+
+    res = particle_swarm(sphere, -np.ones(2), np.ones(2), particles=20, iterations=30,
+                         rng=np.random.default_rng(0), feasible=feasible)
+    assert res.x[0] <= 0.0
+    assert abs(res.x[0]) < 0.05 and abs(res.x[1] - 0.3) < 0.05  # the constrained optimum (0, 0.3)
+    assert 0 < len(checked) < 20 * 31  # asked only about would-be bests
