@@ -1,0 +1,359 @@
+"""Readers and writers: meshes, TGF skeletons, .dmat, .mesh, poses, atomic writes."""
+
+import json
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless import io
+from supportless.rig import signed_volume
+
+FORMATS = ["stl", "obj", "ply", "off", "3mf", "glb"]
+
+
+def _same_triangles(V2, F2, V, F, tol=1e-6):
+    """Assert two meshes have the same oriented triangles, whatever the vertex numbering.
+
+    Every vertex of the second mesh is matched to the nearest vertex of the
+    first (within ``tol``); the triangles, as index triples started at their
+    smallest index (a cyclic shift keeps the orientation), must be the same sets.
+    """
+    from scipy.spatial import cKDTree
+
+    assert V2.shape == V.shape and F2.shape == F.shape
+    dist, match = cKDTree(V).query(V2)
+    assert dist.max() <= tol
+    assert len(np.unique(match)) == len(V)
+
+    def canonical(F):
+        F = np.asarray(F)
+        k = np.argmin(F, axis=1)
+        rolled = np.stack([F[np.arange(len(F)), (k + i) % 3] for i in range(3)], axis=1)
+        return rolled[np.lexsort(rolled.T[::-1])]
+
+    np.testing.assert_array_equal(canonical(match[F2]), canonical(F))
+
+
+@pytest.fixture(scope="module")
+def branch_mesh():
+    V, F, _, _ = sl.demo_figure("branch")
+    # coordinates exactly representable in float32, as STL, GLB and 3MF store them
+    return V.astype(np.float32).astype(np.float64), F
+
+
+# ------------------------------------------------------------------------ meshes
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_mesh_round_trip(tmp_path, branch_mesh, ext):
+    V, F = branch_mesh
+    path = tmp_path / f"branch.{ext}"
+    sl.write_mesh(path, V, F)
+    V2, F2 = sl.read_mesh(path)
+    assert V2.dtype == np.float64 and F2.dtype == np.int64
+    _same_triangles(V2, F2, V, F)
+    np.testing.assert_allclose(signed_volume(V2, F2), signed_volume(V, F), rtol=1e-6)
+    io.check_closed_surface(V2, F2, path)
+    # nothing but the file itself is left in the folder
+    assert [p.name for p in tmp_path.iterdir()] == [path.name]
+
+
+def test_planar_mesh_is_written_with_z_zero(tmp_path):
+    V, F, _, _ = sl.demo_figure("woody2d")
+    sl.write_mesh(tmp_path / "w.obj", V, F)
+    V2, F2 = sl.read_mesh(tmp_path / "w.obj")
+    assert V2.shape == (len(V), 3) and np.all(V2[:, 2] == 0)
+    _same_triangles(V2[:, :2], F2, V, F)
+
+
+def test_stl_soup_is_welded(tmp_path, box_surface):
+    V, F = box_surface((0, 0, 0), (1, 2, 3))
+    sl.write_mesh(tmp_path / "box.stl", V, F)
+    V2, F2 = sl.read_mesh(tmp_path / "box.stl")
+    assert V2.shape == (8, 3) and F2.shape == (12, 3)
+    io.check_closed_surface(V2, F2)
+    assert signed_volume(V2, F2) == pytest.approx(6.0)
+
+
+def test_merge_duplicate_vertices_keeps_a_clean_mesh_unchanged(box_surface):
+    V, F = box_surface()
+    V2, F2 = io.merge_duplicate_vertices(V, F)
+    assert V2 is V and F2 is F
+    Vd = np.vstack([V, V[:1], [[9.0, 9.0, 9.0]]])  # a duplicate of vertex 0 and an unused vertex
+    Fd = F.copy()
+    Fd[0, 0] = 8
+    V3, F3 = io.merge_duplicate_vertices(Vd, Fd)
+    np.testing.assert_array_equal(V3, V)
+    np.testing.assert_array_equal(F3, F)
+
+
+@pytest.mark.parametrize("ext", FORMATS)
+def test_garbage_mesh_is_an_input_error(tmp_path, ext):
+    path = tmp_path / f"garbage.{ext}"
+    path.write_bytes(b"\x00\x01garbage\xff" * 50)
+    with pytest.raises(sl.InputError) as info:
+        sl.read_mesh(path)
+    assert str(info.value).startswith(f"{path}: ")
+    assert "\n" not in str(info.value)
+
+
+def test_unknown_and_missing_mesh_files(tmp_path):
+    (tmp_path / "model.xyz").write_text("1 2 3\n")
+    with pytest.raises(sl.InputError, match=r"model\.xyz: unknown mesh format '\.xyz'"):
+        sl.read_mesh(tmp_path / "model.xyz")
+    with pytest.raises(sl.InputError, match=r"nope\.stl: no such file"):
+        sl.read_mesh(tmp_path / "nope.stl")
+    with pytest.raises(sl.InputError, match=r"out\.xyz: unknown output format"):
+        sl.write_mesh(tmp_path / "out.xyz", np.eye(3), np.array([[0, 1, 2]]))
+    assert not (tmp_path / "out.xyz").exists()
+
+
+def test_check_closed_surface_messages(box_surface):
+    V, F = box_surface()
+    io.check_closed_surface(V, F)
+    with pytest.raises(sl.InputError, match="box.obj: surface is not closed: 3 boundary edges"):
+        io.check_closed_surface(V, F[1:], "box.obj")
+    with pytest.raises(sl.InputError, match="not manifold"):
+        io.check_closed_surface(V, np.vstack([F, F[:1]]))
+    Fw = F.copy()
+    Fw[0] = Fw[0, ::-1]
+    with pytest.raises(sl.InputError, match="consistently oriented"):
+        io.check_closed_surface(V, Fw)
+
+
+# ---------------------------------------------------------------- atomic writes
+
+
+def test_failed_write_mesh_leaves_nothing(tmp_path, monkeypatch, branch_mesh):
+    import trimesh
+
+    def broken_export(self, file_obj=None, file_type=None, **kwargs):
+        with open(file_obj, "wb") as fh:
+            fh.write(b"half a mesh")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(trimesh.Trimesh, "export", broken_export)
+    with pytest.raises(OSError, match="disk full"):
+        sl.write_mesh(tmp_path / "out.stl", *branch_mesh)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failed_write_keeps_the_previous_file(tmp_path, monkeypatch, branch_mesh):
+    import trimesh
+
+    path = tmp_path / "out.ply"
+    sl.write_mesh(path, *branch_mesh)
+    before = path.read_bytes()
+
+    def broken_export(self, file_obj=None, file_type=None, **kwargs):
+        raise RuntimeError("exporter crashed")
+
+    monkeypatch.setattr(trimesh.Trimesh, "export", broken_export)
+    with pytest.raises(RuntimeError):
+        sl.write_mesh(path, *branch_mesh)
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out.ply"]
+
+
+def test_bad_faces_leave_no_file(tmp_path, branch_mesh):
+    V, F = branch_mesh
+    with pytest.raises(Exception):
+        sl.write_mesh(tmp_path / "out.stl", V, F + len(V))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_path_creates_the_folder(tmp_path):
+    target = tmp_path / "a" / "b" / "c.txt"
+    io.write_text(target, "hello")
+    assert target.read_text() == "hello"
+    assert [p.name for p in target.parent.iterdir()] == ["c.txt"]
+
+
+# ------------------------------------------------------------------------- TGF
+
+
+def test_tgf_round_trip(tmp_path):
+    J, B = sl.demo_figure("tpose")[2:]
+    sl.write_tgf(tmp_path / "s.tgf", J, B)
+    J2, B2 = sl.read_tgf(tmp_path / "s.tgf")
+    assert J2.dtype == np.float64 and B2.dtype == np.int64
+    np.testing.assert_array_equal(J2, J)  # %.17g is exact
+    np.testing.assert_array_equal(B2, B)
+    # 2D joints come back with z = 0
+    J, B = sl.demo_figure("woody2d")[2:]
+    sl.write_tgf(tmp_path / "w.tgf", J, B)
+    J2, B2 = sl.read_tgf(tmp_path / "w.tgf")
+    np.testing.assert_array_equal(J2[:, :2], J)
+    assert np.all(J2[:, 2] == 0)
+    np.testing.assert_array_equal(B2, B)
+
+
+def test_tgf_with_extra_columns(tmp_path):
+    text = (
+        "   1 0.5 1.5 -2 0 0 0 1\n"
+        "   2 0.5 3.5 -2 1 2\n"
+        "   3 1e-1 4 5.25\n"
+        "#\n"
+        "   1    2 1 0 0\n"
+        "   2    3 0 1 0 0 0 0\n"
+        "#\n"
+    )
+    (tmp_path / "x.tgf").write_text(text)
+    J, B = sl.read_tgf(tmp_path / "x.tgf")
+    np.testing.assert_array_equal(J, [[0.5, 1.5, -2], [0.5, 3.5, -2], [0.1, 4, 5.25]])
+    np.testing.assert_array_equal(B, [[0, 1], [1, 2]])
+
+
+def test_tgf_without_final_hash_and_with_blank_lines(tmp_path):
+    (tmp_path / "x.tgf").write_text("1 0 0 0\n\n2 0 1 0\n#\n1 2\n")
+    J, B = sl.read_tgf(tmp_path / "x.tgf")
+    assert J.shape == (2, 3) and B.tolist() == [[0, 1]]
+
+
+def test_tgf_bones_in_any_order(tmp_path):
+    # children listed before their parents: file order is kept, the hierarchy is still found
+    (tmp_path / "x.tgf").write_text("1 0 0 0\n2 0 1 0\n3 0 2 0\n4 1 2 0\n#\n3 4\n2 3\n1 2\n#\n")
+    J, B = sl.read_tgf(tmp_path / "x.tgf")
+    assert B.tolist() == [[2, 3], [1, 2], [0, 1]]
+    assert sl.kinematics.bone_parents(B).tolist() == [1, 2, -1]
+
+
+@pytest.mark.parametrize("name, joints, bones", [("bunny", 12, 11), ("bb-bunny", 13, 12), ("woody", 9, 8)])
+def test_shared_tgf_files(shared_data, name, joints, bones):
+    path = shared_data / f"{name}.tgf"
+    if not path.is_file():
+        pytest.skip(f"{path} not present")
+    J, B = sl.read_tgf(path)
+    assert J.shape == (joints, 3) and B.shape == (bones, 2)
+    assert B.min() >= 0 and B.max() < joints
+    assert (sl.kinematics.bone_parents(B) < 0).sum() >= 1
+
+
+@pytest.mark.parametrize("text, fragments", [
+    ("1 0 0\n#\n", ["line 1", "joint 'index x y z'"]),
+    ("1 0 0 0\n2 0 1 0\n#\n1 x\n", ["line 4", "bone 'i j'"]),
+    ("1 0 0 0\n2 0 1 0\n#\n1 3\n", ["bone 1 (1 3)", "out of range 1..2"]),
+    ("1 0 0 0\n2 0 1 0\n#\n0 1\n", ["out of range 1..2"]),
+    ("1 0 0 0\n2 0 1 0\n#\n2 2\n", ["bone 1 joins joint 2 to itself"]),
+    ("1 0 0 0\n2 0 1 0\n#\n", ["no bones"]),
+    ("", ["no joints"]),
+    ("1 0 nan 0\n2 0 1 0\n#\n1 2\n", ["NaN"]),
+])
+def test_bad_tgf(tmp_path, text, fragments):
+    path = tmp_path / "bad.tgf"
+    path.write_text(text)
+    with pytest.raises(sl.InputError) as info:
+        sl.read_tgf(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and "\n" not in message
+    for fragment in fragments:
+        assert fragment in message
+
+
+def test_missing_tgf(tmp_path):
+    with pytest.raises(sl.InputError, match="none.tgf: no such file"):
+        sl.read_tgf(tmp_path / "none.tgf")
+
+
+# ---------------------------------------------------------------- .dmat, .mesh
+
+
+def test_dmat_round_trip(tmp_path):
+    M = np.random.default_rng(0).random((7, 3))
+    io.write_dmat(tmp_path / "m.dmat", M)
+    np.testing.assert_array_equal(io.read_dmat(tmp_path / "m.dmat"), M)
+    np.testing.assert_array_equal(io.read_dmat(tmp_path / "m.dmat", (7, None)), M)
+    np.testing.assert_array_equal(io.read_dmat(tmp_path / "m.dmat", (None, 3)), M)
+
+
+def test_dmat_is_column_major_like_libigl(tmp_path):
+    (tmp_path / "m.dmat").write_text("3 2\n1 2 3 4 5 6\n")  # cols rows, then column by column
+    np.testing.assert_array_equal(io.read_dmat(tmp_path / "m.dmat"), [[1, 3, 5], [2, 4, 6]])
+
+
+def test_bad_dmat(tmp_path):
+    io.write_dmat(tmp_path / "m.dmat", np.ones((4, 2)))
+    with pytest.raises(sl.InputError, match=r"m\.dmat: matrix is 4x2 but 4x3 was expected \(one column per bone\)"):
+        io.read_dmat(tmp_path / "m.dmat", (4, 3))
+    with pytest.raises(sl.InputError, match="one row per vertex"):
+        io.read_dmat(tmp_path / "m.dmat", (5, 2))
+    (tmp_path / "short.dmat").write_text("2 2\n1 2 3\n")
+    with pytest.raises(sl.InputError, match=r"short\.dmat: not an ASCII \.dmat"):
+        io.read_dmat(tmp_path / "short.dmat")
+    (tmp_path / "text.dmat").write_text("hello\n")
+    with pytest.raises(sl.InputError, match=r"text\.dmat: not an ASCII \.dmat"):
+        io.read_dmat(tmp_path / "text.dmat")
+    with pytest.raises(sl.InputError, match="no such file"):
+        io.read_dmat(tmp_path / "none.dmat")
+
+
+def test_tet_mesh_round_trip(tmp_path, branch_rig):
+    io.write_tet_mesh(tmp_path / "t.mesh", branch_rig.tet_vertices, branch_rig.tets)
+    TV, TT = io.read_tet_mesh(tmp_path / "t.mesh")
+    np.testing.assert_allclose(TV, branch_rig.tet_vertices, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(TT, branch_rig.tets)
+
+
+def test_bad_tet_mesh(tmp_path):
+    with pytest.raises(sl.InputError, match="no such file"):
+        io.read_tet_mesh(tmp_path / "none.mesh")
+    (tmp_path / "bad.mesh").write_text("this is not a mesh\n")
+    with pytest.raises(sl.InputError, match=r"bad\.mesh: "):
+        io.read_tet_mesh(tmp_path / "bad.mesh")
+
+
+# ------------------------------------------------------------------------ poses
+
+
+def test_pose_round_trip(tmp_path):
+    J, B = sl.demo_figure("tpose")[2:]
+    angles = np.random.default_rng(1).uniform(-np.pi, np.pi, (len(B), 3))
+    sl.write_pose(tmp_path / "p.json", angles, B, J, extra={"objective": 0.25})
+    np.testing.assert_array_equal(sl.read_pose(tmp_path / "p.json"), angles)
+    np.testing.assert_array_equal(sl.read_pose(tmp_path / "p.json", B), angles)
+    data = json.loads((tmp_path / "p.json").read_text())
+    assert data["format"] == "supportless-pose" and data["objective"] == 0.25
+    np.testing.assert_allclose(np.radians(data["angles_deg"]), angles, atol=1e-7)
+    assert data["bones"] == B.tolist()
+
+
+def test_pose_for_another_skeleton_is_rejected(tmp_path):
+    B = sl.demo_figure("branch")[3]
+    sl.write_pose(tmp_path / "p.json", np.zeros((len(B), 3)), B)
+    other = sl.demo_figure("tpose")[3]
+    with pytest.raises(sl.InputError, match=r"p\.json: pose is for a skeleton with 3 bones, not this one with 15"):
+        sl.read_pose(tmp_path / "p.json", other)
+    # same number of bones, other connectivity
+    with pytest.raises(sl.InputError, match="use the skeleton the pose was made with"):
+        sl.read_pose(tmp_path / "p.json", B[[1, 0, 2]])
+
+
+@pytest.mark.parametrize("text", ["not json", '{"bones": []}', '{"angles": [[1, 2]]}', '{"angles": "x"}',
+                                  '[1, 2, 3]'])
+def test_bad_pose_file(tmp_path, text):
+    path = tmp_path / "p.json"
+    path.write_text(text)
+    with pytest.raises(sl.InputError) as info:
+        sl.read_pose(path)
+    assert str(info.value).startswith(f"{path}: ")
+
+
+# --------------------------------------------------------------------- up vector
+
+
+@pytest.mark.parametrize("up, expected", [("y", [0, 1, 0]), ("-Z", [0, 0, -1]), ("+x", [1, 0, 0]),
+                                          ("0,2,0", [0, 1, 0]), ("1 1 0", [2 ** -0.5, 2 ** -0.5, 0]),
+                                          ((0, 0, 3), [0, 0, 1])])
+def test_parse_up(up, expected):
+    np.testing.assert_allclose(io.parse_up(up), expected, atol=1e-15)
+
+
+def test_parse_up_2d_and_errors():
+    np.testing.assert_array_equal(io.parse_up("y", dim=2), [0, 1])
+    np.testing.assert_array_equal(io.parse_up("1,0"), [1, 0, 0])  # two numbers: z = 0
+    for bad in ("w", "0,0,0", "1,2,3,4", "1 nan 0", (0, 1, 0, 0)):
+        with pytest.raises(sl.InputError, match="up direction"):
+            io.parse_up(bad)
+    with pytest.raises(sl.InputError, match="in the plane"):
+        io.parse_up("z", dim=2)
