@@ -205,3 +205,16 @@ def test_2d():
     assert support_volume(V, F, up) == 0.0
     VV = np.stack([V, 2 * V])
     np.testing.assert_array_equal(support_volume(VV, F, up), [0.0, 0.0])
+
+
+def test_faces_inside_material_need_no_support():
+    # two overlapping boxes given as one face list: the upper box's bottom
+    # (z=1, x in [1,3]) lies inside the lower box for x < 2 -> only x in [2,3]
+    # needs a column (length 1, area 1)
+    a = box([0, 0, 0], [2, 1, 2])
+    b = box([1, 0, 1], [3, 1, 3])
+    V = np.vstack([a.vertices, b.vertices])
+    F = np.vstack([a.faces, b.faces + len(a.vertices)])
+    assert support_volume(V, F, UP) == pytest.approx(1.0, rel=0.01)
+    # the prism counts the whole bottom of b: area 2 at height 1
+    assert overhang_energy(V, F, UP) == pytest.approx(2.0)
