@@ -1,0 +1,187 @@
+"""The ``supportless`` command line: smoke tests and one-line errors with exit status 2.
+
+Most commands run in-process with click's CliRunner (fast: the package and its
+compiled kernels load once); one test runs the installed executable to check
+what a user really sees on stderr.
+"""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import supportless as sl
+from supportless.cli import main
+from supportless.search import place_on_plate
+
+EXE = Path(sys.executable).with_name("supportless")
+
+
+def run(*args, env=None):
+    """Run the CLI in-process; returns the click Result (stdout and stderr kept apart)."""
+    return CliRunner().invoke(main, [str(a) for a in args], env=env, catch_exceptions=True)
+
+
+def assert_user_error(result, *fragments):
+    """Exit status 2 and exactly one line on stderr: 'supportless: error: ...'."""
+    assert result.exit_code == 2, (result.exit_code, result.output, result.exception)
+    assert isinstance(result.exception, SystemExit), repr(result.exception)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("supportless: error: "), lines[0]
+    assert "Traceback" not in result.output
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def optimized(tmp_path_factory, branch_files):
+    """One tiny search of the branch figure with every output asked for."""
+    out = tmp_path_factory.mktemp("optimize")
+    result = run("optimize", branch_files["mesh"], "--skeleton", branch_files["skeleton"],
+                 "--cache-dir", branch_files["cache"], "--particles", 6, "--iterations", 3, "--seed", 5, "-q",
+                 "-o", out / "posed.obj", "--pose", out / "pose.json", "--report", out / "report.json",
+                 "--pictures", out / "pictures")
+    return out, result
+
+
+# ------------------------------------------------------------------------ smoke
+
+
+def test_prepare_prints_the_rig(branch_files):
+    args = ("prepare", branch_files["mesh"], "--skeleton", branch_files["skeleton"],
+            "--cache-dir", branch_files["cache"])
+    first = run(*args)
+    assert first.exit_code == 0, first.output
+    rig = sl.load_rig(branch_files["mesh"], branch_files["skeleton"], cache_dir=branch_files["cache"])
+    assert (f"branch: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} tets, "
+            f"3 bones, 3D") in first.stdout
+    second = run(*args)
+    assert second.exit_code == 0 and "from the cache" in second.stdout
+
+
+def test_prepare_finds_the_skeleton_beside_the_model(branch_files):
+    result = run("prepare", branch_files["mesh"], "--cache-dir", branch_files["cache"])
+    assert result.exit_code == 0, result.output
+    assert "3 bones" in result.stdout
+
+
+def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
+    out, result = optimized
+    assert result.exit_code == 0, (result.output, result.exception)
+    V, F = sl.read_mesh(out / "posed.obj")
+    assert F.shape == branch_files["F"].shape
+    assert V[:, 1].min() == pytest.approx(0.0, abs=1e-6)  # placed on the build plate
+    angles = sl.read_pose(out / "pose.json", branch_files["bones"])
+    assert angles.shape == (3, 3) and np.all(np.abs(angles) <= np.radians(30.0) + 1e-12)
+    report = json.loads((out / "report.json").read_text())
+    for key in ("before", "after", "reduction_percent"):
+        assert key in report
+    for side in ("before", "after"):
+        assert isinstance(report[side]["intersecting_face_pairs"], int)
+        assert report[side]["overhang_prism"] >= 0
+    assert report["after"]["objective"] <= report["before"]["objective"] + 1e-12
+    pictures = sorted(p.name for p in (out / "pictures").iterdir())
+    assert pictures and all(name.endswith(".png") for name in pictures)
+    assert all((out / "pictures" / name).stat().st_size > 1000 for name in pictures)
+    # nothing else (no temporary files) in the output folder
+    assert sorted(p.name for p in out.iterdir()) == ["pictures", "pose.json", "posed.obj", "report.json"]
+
+
+def test_optimize_is_reproducible_with_a_seed(optimized, branch_files, tmp_path):
+    out, _ = optimized
+    again = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
+                "--iterations", 3, "--seed", 5, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json")
+    assert again.exit_code == 0, again.output
+    first = json.loads((out / "pose.json").read_text())
+    second = json.loads((tmp_path / "pose.json").read_text())
+    assert first["angles"] == second["angles"]
+
+
+def test_apply_writes_the_posed_mesh(branch_files, tmp_path):
+    B = branch_files["bones"]
+    angles = np.zeros((len(B), 3))
+    angles[1] = [0.0, 0.0, 0.6]  # lift the arm
+    sl.write_pose(tmp_path / "pose.json", angles, B)
+    result = run("apply", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--pose",
+                 tmp_path / "pose.json", "-o", tmp_path / "posed.ply")
+    assert result.exit_code == 0, result.output
+    assert "posed.ply" in result.stdout
+    V, F = sl.read_mesh(tmp_path / "posed.ply")
+    rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
+    expected = place_on_plate(rig.pose(angles), rig.up)
+    np.testing.assert_array_equal(F, rig.faces)
+    np.testing.assert_allclose(V, expected, atol=1e-5)
+
+
+def test_demo_2d(tmp_path):
+    result = run("demo", "--figure", "woody2d", "--out", tmp_path / "demo", "--particles", 4, "--iterations", 2,
+                 "-q", env={"SUPPORTLESS_CACHE": str(tmp_path / "cache")})
+    assert result.exit_code == 0, (result.output, result.exception)
+    names = {p.name for p in (tmp_path / "demo").iterdir()}
+    assert {"woody2d-rest.obj", "woody2d.tgf", "woody2d-posed.obj", "woody2d-pose.json",
+            "woody2d-report.json"} <= names
+    V, F = sl.read_mesh(tmp_path / "demo" / "woody2d-posed.obj")
+    assert np.all(V[:, 2] == 0)
+    report = json.loads((tmp_path / "demo" / "woody2d-report.json").read_text())
+    assert report["dimension"] == 2
+
+
+# ----------------------------------------------------------------------- errors
+
+
+def test_bad_input_is_one_line_and_exit_2(bad_case):
+    model, kwargs, culprit, fragments = bad_case
+    args = ["prepare", model, "--no-cache"]
+    for option in ("skeleton", "tets", "weights"):
+        if option in kwargs:
+            args += [f"--{option}", kwargs[option]]
+    line = assert_user_error(run(*args), str(culprit), *fragments)
+    assert line == f"supportless: error: {line.split('supportless: error: ', 1)[1]}"
+
+
+def test_optimize_with_a_bad_output_extension_writes_nothing(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 2,
+                 "--iterations", 0, "-q", "-o", tmp_path / "out.xyz", "--pose", tmp_path / "pose.json",
+                 "--report", tmp_path / "report.json")
+    assert_user_error(result, "out.xyz", "unknown output format")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_apply_rejects_a_pose_for_another_skeleton(branch_files, tmp_path):
+    tpose_bones = sl.demo_figure("tpose")[3]
+    sl.write_pose(tmp_path / "pose.json", np.zeros((len(tpose_bones), 3)), tpose_bones)
+    result = run("apply", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--pose",
+                 tmp_path / "pose.json", "-o", tmp_path / "posed.stl")
+    assert_user_error(result, "pose.json", "15 bones", "3 bones")
+    assert not (tmp_path / "posed.stl").exists()
+
+
+def test_bad_up_option(branch_files):
+    result = run("prepare", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--up", "sideways")
+    assert_user_error(result, "up direction")
+
+
+def test_bad_fix_option(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 2,
+                 "--iterations", 0, "-q", "--fix", "99", "-o", tmp_path / "out.stl")
+    assert_user_error(result)
+    assert not (tmp_path / "out.stl").exists()
+
+
+def test_real_executable_prints_one_line(tmp_path):
+    """What a user sees: a missing file gives one line on stderr, status 2, no traceback."""
+    assert EXE.exists(), EXE
+    proc = subprocess.run([str(EXE), "prepare", str(tmp_path / "missing.stl"), "--no-cache"],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "SUPPORTLESS_CACHE": str(tmp_path / "cache")})
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == f"supportless: error: {tmp_path / 'missing.stl'}: no such file"
+    assert "Traceback" not in proc.stderr + proc.stdout
+    assert proc.stdout == ""
