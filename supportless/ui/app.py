@@ -152,8 +152,10 @@ def _fmt(x: float | None, spec: str = ".4g") -> str:
     return "n/a" if x is None else format(float(x), spec)
 
 
-def _pct(x: float | None) -> str:
-    return "n/a" if x is None else f"{x:+.1f} %"
+def _vs_rest(x: float | None) -> str:
+    if x is None:
+        return "rest pose needs none"
+    return f"{x:.1f} % less than rest" if x >= 0 else f"{-x:.1f} % more than rest"
 
 
 def _parse_bone_list(text: str) -> list[str]:
@@ -209,7 +211,6 @@ class App:
         self._latencies: list[float] = []
         self._requested = 0
         self._rendered = 0
-        self._input_time = time.perf_counter()
         self._stopping = False
         self._dragging = False
         self._weights_view = False
@@ -279,7 +280,6 @@ class App:
         if angles.shape != self.angles.shape:
             raise ValueError(f"pose has shape {angles.shape}, the rig needs {self.angles.shape}")
         with self._lock:
-            self._input_time = time.perf_counter()
             if record:
                 self.history.record(self.angles, key)
             self.angles = angles.copy()
@@ -314,7 +314,6 @@ class App:
                 self._set_status("nothing to undo")
                 return False
             self.angles = prev
-            self._input_time = time.perf_counter()
         self._sync_sliders()
         self._request_render()
         return True
@@ -327,7 +326,6 @@ class App:
                 self._set_status("nothing to redo")
                 return False
             self.angles = nxt
-            self._input_time = time.perf_counter()
         self._sync_sliders()
         self._request_render()
         return True
@@ -478,11 +476,12 @@ class App:
         def callback(iteration, info):
             with self._lock:
                 self.angles = np.array(info["angles"], np.float64)
-                self._input_time = time.perf_counter()
                 self.opt_progress.update(iteration=iteration, value=float(info["value"]))
             self._request_render()
             self.gui_progress.value = 100.0 * iteration / max(total, 1)
             self.gui_opt_info.content = f"iteration {iteration} / {total} · best objective {info['value']:.4g}"
+            self.gui_status.content = (f"**Status:** searching, iteration {iteration} / {total}, "
+                                       f"best objective {info['value']:.4g}")
             return False if self._opt_cancel.is_set() else None
 
         def run():
@@ -500,7 +499,6 @@ class App:
                 return
             with self._lock:
                 self.angles = np.array(result.angles, np.float64)
-                self._input_time = time.perf_counter()
                 self.last_result = result
                 self.opt_progress.update(running=False, cancelled=bool(result.interrupted), value=result.value)
             self._sync_sliders()
@@ -602,19 +600,21 @@ class App:
         lo = float((self._rest3 @ up).min())
         # build plate: grid in the plane normal to up, moved to the lowest point
         self._plate_rot = _quat_from_matrix(_rotation_between(np.array([0, 0, 1.0]), up))
-        step = 10 ** np.floor(np.log10(size / 4))
+        step = 10 ** np.floor(np.log10(size / 3))
         centre_plate = centre - (centre @ up) * up
-        self.h_grid = s.add_grid("/plate", width=3 * size, height=3 * size, plane="xy", cell_size=step / 2,
-                                 section_size=step * 2, wxyz=self._plate_rot,
+        self.h_grid = s.add_grid("/plate", width=3 * size, height=3 * size, plane="xy", cell_size=step,
+                                 section_size=step * 5, wxyz=self._plate_rot,
                                  position=centre_plate + lo * up, cell_color=(190, 195, 205),
                                  section_color=(120, 125, 140), plane_color=(235, 238, 242), plane_opacity=0.6,
                                  shadow_opacity=0.2)
         self._centre_plate = centre_plate
-        a0 = centre_plate + lo * up + 0.9 * size * self._perp(up)
-        self.h_up = s.add_arrows("/up_arrow", points=np.array([[a0, a0 + 0.35 * size * up]]),
-                                 colors=(20, 160, 60), shaft_radius=0.006 * size, head_radius=0.018 * size,
-                                 head_length=0.05 * size)
-        s.add_label("/up_label", "up (print direction)", position=a0 + 0.4 * size * up)
+        side = self._perp(up)
+        back = -np.cross(up, side)
+        a0 = centre_plate + lo * up + 0.55 * size * (back - side)
+        self.h_up = s.add_arrows("/up_arrow", points=np.array([[a0, a0 + 0.3 * size * up]]),
+                                 colors=(20, 160, 60), shaft_radius=0.005 * size, head_radius=0.015 * size,
+                                 head_length=0.045 * size)
+        s.add_label("/up_label", "up", position=a0 + 0.34 * size * up)
 
         # the skinned mesh: bones start at their root joints, unrotated
         m = self.rig.bone_count
@@ -630,7 +630,7 @@ class App:
         self.h_risky_edges = None
 
         # skeleton
-        r = 0.018 * size
+        r = 0.011 * size
         J = _to3(self.rig.joints)
         self.h_joints = []
         for j, p in enumerate(J):
@@ -638,32 +638,29 @@ class App:
             h.on_click(self._make_joint_click(j))
             self.h_joints.append(h)
         self.h_bones = s.add_line_segments("/model/bones", points=J[self.rig.bones],
-                                           colors=self._bone_colors(), thickness=0.008 * size)
+                                           colors=self._bone_colors(), thickness=0.006 * size)
         self.h_gizmo = s.add_transform_controls("/gizmo", scale=0.3 * size, disable_axes=True,
                                                 disable_sliders=True, depth_test=False,
                                                 position=self._roots3[0])
 
-        @self.h_gizmo.on_drag_start
-        def _(_event):
-            with self._lock:
-                self._dragging = True
-                self.history.record(self.angles)
-
-        @self.h_gizmo.on_drag_end
-        def _(_event):
-            with self._lock:
-                self._dragging = False
-            self._request_render()
-
         @self.h_gizmo.on_update
-        def _(event):
-            self._on_gizmo(np.asarray(self.h_gizmo.wxyz, np.float64))
+        async def _(event):  # async: phases arrive in order
+            if event.phase == "start":
+                with self._lock:
+                    self._dragging = True
+                    self.history.record(self.angles)
+            elif event.phase == "end":
+                with self._lock:
+                    self._dragging = False
+                self._request_render()
+            else:
+                self._on_gizmo(np.asarray(event.target.wxyz, np.float64))
 
         cam = self.server.initial_camera
         cam.look_at = tuple(centre)
         side = self._perp(up)
         fwd = np.cross(up, side)
-        cam.position = tuple(centre + size * (0.9 * fwd + 0.45 * side + 0.45 * up))
+        cam.position = tuple(centre + size * (0.85 * fwd + 0.35 * side + 0.4 * up))
         cam.up = tuple(up)
 
     @staticmethod
@@ -834,7 +831,6 @@ class App:
             self.objective = obj
             self._rest_measures = None
         self._rest_measures = self.measure(self.rig.rest_angles(), exact=False)
-        self._input_time = time.perf_counter()
         self._request_render()
 
     def _update_fixed_info(self):
@@ -881,6 +877,8 @@ class App:
     # =============================================================== render
     def _request_render(self) -> None:
         with self._cond:
+            if self._rendered >= self._requested:  # latency counts from the oldest input not yet drawn
+                self._input_time = time.perf_counter()
             self._requested += 1
             self._cond.notify_all()
 
@@ -1036,8 +1034,8 @@ class App:
             f"- ARAP term: {_fmt(t['arap'])} (× {obj.w_arap:g})",
             f"- Overhang term: {_fmt(t['overhang'])} (× {obj.w_overhang:g})",
             f"- Intersection term: {_fmt(t['intersection'])} (× {obj.w_intersect:g})",
-            f"- Support (prism): {_fmt(m['prism'])} ({_pct(m.get('prism_reduction'))} less than rest)",
-            f"- Support (column): {_fmt(m['column'])} ({_pct(m.get('column_reduction'))} less than rest)",
+            f"- Support (prism): {_fmt(m['prism'])} ({_vs_rest(m.get('prism_reduction'))})",
+            f"- Support (column): {_fmt(m['column'])} ({_vs_rest(m.get('column_reduction'))})",
             f"- Risky faces: {int(np.sum(m['risky']))} · self-intersecting: {inter_txt}",
             f"- Update time: mesh {lat.get('mesh', 0):.1f} ms · with energies {lat.get('full', 0):.1f} ms",
         ])

@@ -1,0 +1,333 @@
+"""Tests of the viser web app (supportless.ui): app state without a browser, and
+the page itself driven through Playwright in Debian's Chromium.
+
+The browser test saves a screenshot to ``test-artifacts/ui.png``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import socket
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from supportless import io as sio
+from supportless.errors import InputError
+from supportless.rig import load_rig, prepare_rig
+
+pytest.importorskip("viser")
+
+from supportless.ui import App, find_free_port  # noqa: E402
+
+CHROMIUM = Path("/usr/bin/chromium")
+ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
+
+
+def _box_arm_rig():
+    """A post with a horizontal arm (two bones), for when the demo figures are missing."""
+    import manifold3d as mf
+
+    post = mf.Manifold.cube([10.0, 40.0, 10.0]).translate([-5.0, 0.0, -5.0])
+    arm = mf.Manifold.cube([30.0, 8.0, 8.0]).translate([0.0, 30.0, -4.0])
+    mesh = (post + arm).to_mesh()
+    V = np.asarray(mesh.vert_properties, np.float64)[:, :3]
+    F = np.asarray(mesh.tri_verts, np.int64)
+    J = np.array([[0.0, 3.0, 0.0], [0.0, 34.0, 0.0], [27.0, 34.0, 0.0]])
+    B = np.array([[0, 1], [1, 2]])
+    return prepare_rig(V, F, J, B, up="y", name="box-arm")
+
+
+@pytest.fixture(scope="module")
+def rig():
+    try:
+        import supportless.shapes  # noqa: F401
+    except ImportError:
+        return _box_arm_rig()
+    return load_rig("demo:branch")
+
+
+@pytest.fixture(scope="module")
+def app(rig, tmp_path_factory):
+    a = App(rig, verbose=False, workdir=tmp_path_factory.mktemp("ui"))
+    assert a.wait_idle(60)
+    yield a
+    a.stop()
+
+
+def _other_bones(rig):
+    return np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [5, 6]][: rig.bone_count + 2])
+
+
+# --------------------------------------------------------------------------- #
+# ports
+# --------------------------------------------------------------------------- #
+def test_taken_port_is_a_clear_error_and_default_picks_a_free_one(rig):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        busy = s.getsockname()[1]
+        assert find_free_port("127.0.0.1", busy) != busy
+        with pytest.raises(InputError, match=rf"port {busy} on 127\.0\.0\.1 is taken; use --port N"):
+            App(rig, port=busy, verbose=False)
+
+
+def test_app_serves_on_localhost_only(app):
+    assert app.url == f"http://127.0.0.1:{app.port}"
+    assert app.server.get_host() == "127.0.0.1"
+
+
+# --------------------------------------------------------------------------- #
+# app state without a browser
+# --------------------------------------------------------------------------- #
+def test_posing_updates_measures_and_latency(app, rig):
+    app.reset()
+    assert app.wait_idle()
+    rest = dict(app.measures)
+    assert rest["prism_reduction"] == pytest.approx(0.0, abs=1e-9)
+    b = rig.bone_count - 1
+    app.set_bone_angles(b, [0.0, 0.0, 40.0])
+    assert app.wait_idle()
+    assert app.measures["objective"] != pytest.approx(rest["objective"])
+    assert app.measures["terms"]["arap"] > rest["terms"]["arap"]
+    assert app.latency_ms["mesh"] >= 0 and app.latency_ms["full"] >= app.latency_ms["mesh"]
+    assert "Objective:" in app.gui_measures.content
+
+
+def test_undo_redo_reset(app, rig):
+    app.reset()
+    app.wait_idle()
+    b = rig.bone_count - 1
+    app.set_bone_angles(b, [10.0, 0.0, 0.0], key="a")
+    app.set_bone_angles(b, [10.0, 20.0, 0.0], key="b")  # another control: a separate step
+    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 20, 0])
+    assert app.undo()
+    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert app.undo()
+    assert np.allclose(app.get_angles(), 0.0)
+    assert app.redo()
+    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    app.reset()
+    assert np.allclose(app.get_angles(), 0.0)
+    assert app.undo()  # reset is undoable
+    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    # the sliders follow the selected bone
+    app.select_bone(b)
+    assert [s.value for s in app.gui_sliders] == [10.0, 0.0, 0.0]
+    # a drag of one slider is one undo step
+    for v in range(11, 30):
+        app.set_bone_angles(b, [v, 0.0, 0.0], key=("slider", b, 0))
+    assert app.undo()
+    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert app.wait_idle()
+
+
+def test_gizmo_rotation_becomes_relative_euler_angles(app, rig):
+    from supportless.kinematics import euler_to_matrix
+    from supportless.ui.app import _quat_from_matrix
+
+    app.reset()
+    child = int(np.flatnonzero(rig.parents >= 0)[-1])
+    parent = int(rig.parents[child])
+    target = np.zeros((rig.bone_count, 3))
+    target[parent] = np.radians([10.0, -20.0, 15.0])
+    target[child] = np.radians([25.0, 30.0, -40.0])
+    app.set_angles(np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target))
+    app.select_bone(child)
+    world = rig.transforms(target)[parent][:, :3] @ euler_to_matrix(target[child])
+    app._on_gizmo(_quat_from_matrix(world))
+    assert np.allclose(app.get_angles(), target, atol=1e-6)
+    assert app.gui_sliders[2].value == pytest.approx(-40.0)
+    assert app.wait_idle()
+
+
+def test_planar_rig(tmp_path):
+    try:
+        rig2 = load_rig("demo:woody2d")
+    except (ImportError, KeyError):
+        pytest.skip("no 2D demo figure (supportless.shapes)")
+    a = App(rig2, verbose=False, workdir=tmp_path)
+    try:
+        assert a.wait_idle(60)
+        a.set_bone_angles(rig2.bone_count - 1, [0, 0, 30.0])
+        assert a.wait_idle()
+        assert "not checked (2D)" in a.gui_measures.content
+        assert a.export_mesh(tmp_path / "flat.stl")
+    finally:
+        a.stop()
+
+
+def test_save_and_load_pose(app, rig, tmp_path):
+    app.reset()
+    app.set_bone_angles(rig.bone_count - 1, [0, 0, 25.0])
+    target = app.get_angles()
+    path = tmp_path / "pose.json"
+    assert app.save_pose(path)
+    app.reset()
+    assert app.load_pose(path)
+    assert np.allclose(app.get_angles(), target)
+    assert app.load_pose_bytes("up.json", path.read_bytes())
+    assert np.allclose(app.get_angles(), target)
+
+
+def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_path):
+    app.reset()
+    app.wait_idle()
+    other = tmp_path / "other.json"
+    bones = _other_bones(rig)
+    sio.write_pose(other, np.zeros((len(bones), 3)), bones)
+    before = app.get_angles()
+    assert not app.load_pose(other)
+    assert "skeleton" in app.status and app.status.startswith("Error")
+    assert "Error" in app.gui_status.content and "skeleton" in app.gui_status.content
+    assert np.array_equal(app.get_angles(), before)
+
+    junk = tmp_path / "junk.json"
+    junk.write_text("{not json")
+    assert not app.load_pose(junk)
+    assert "not a pose file" in app.status
+    assert not app.load_pose(tmp_path / "missing.json")
+    assert "no such file" in app.status
+    assert not app.load_pose_bytes("x.json", b"\x00\x01")
+
+    # still serving and drawing
+    app.set_bone_angles(0, [0, 0, 5.0])
+    assert app.wait_idle()
+    assert app._worker.is_alive()
+    import urllib.request
+
+    with urllib.request.urlopen(app.url, timeout=10) as r:
+        assert r.status == 200
+
+
+def test_export_mesh_on_the_plate(app, rig, tmp_path):
+    import trimesh
+
+    app.reset()
+    app.set_bone_angles(0, [0, 0, 30.0])
+    for ext in ("stl", "3mf"):
+        p = tmp_path / f"posed.{ext}"
+        assert app.export_mesh(p)
+        m = trimesh.load(p, force="mesh")
+        assert len(m.faces) == len(rig.faces)
+        assert float((m.vertices @ rig.up).min()) == pytest.approx(0.0, abs=1e-5)
+    assert len(app.mesh_bytes("stl")) > 84
+    assert not app.export_mesh(tmp_path / "posed.xyz")
+    assert "unknown output format" in app.status
+
+
+def test_optimise_in_background_and_cancel(app, rig):
+    app.reset()
+    app.wait_idle()
+    rest_column = app.measures["column"]
+    assert app.start_optimise(particles=12, iterations=4, seed=1)
+    assert not app.start_optimise()  # one search at a time
+    assert app.wait_optimise(300)
+    assert app.last_result is not None and not app.last_result.interrupted
+    assert np.allclose(app.get_angles(), app.last_result.angles)
+    assert app.wait_idle()
+    assert app.measures["column"] < rest_column
+    assert app.opt_progress["iteration"] == 4
+    # the user can undo back to where the search started, and cancel a long search
+    assert app.undo()
+    assert np.allclose(app.get_angles(), 0.0)
+    assert app.start_optimise(particles=8, iterations=100000)
+    app.cancel_optimise()
+    assert app.wait_optimise(120)
+    assert app.last_result.interrupted
+    assert "cancelled" in app.status
+    # bad fixed-bone text
+    assert not app.start_optimise(fix=["99"])
+    assert "out of range" in app.status
+
+
+# --------------------------------------------------------------------------- #
+# the page in a real browser
+# --------------------------------------------------------------------------- #
+def _browser():
+    if not CHROMIUM.exists():
+        pytest.skip(f"Chromium not found at {CHROMIUM}: apt-get install chromium")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.skip("playwright is not installed: pip install playwright (no browser download needed)")
+    return sync_playwright
+
+
+def _number(text: str, label: str) -> float:
+    m = re.search(re.escape(label) + r":\s*\**([-+0-9.eE]+)", text)
+    assert m, f"{label!r} not found in {text!r}"
+    return float(m.group(1))
+
+
+def test_page_in_chromium(rig, tmp_path):
+    sync_playwright = _browser()
+    app = App(rig, verbose=False, workdir=tmp_path)
+    errors: list[str] = []
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(
+                executable_path=str(CHROMIUM),
+                args=["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+                      "--disable-background-networking"])
+            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(app.url)
+            energies = page.locator("li", has_text="Objective:").locator("..")
+            energies.wait_for(timeout=60000)
+            rest_text = energies.inner_text()
+            rest_objective = _number(rest_text, "Objective")
+            rest_column = _number(rest_text, "Support (column)")
+
+            # pick the last bone in the dropdown, then turn it with the Z slider's keyboard arrows
+            last = rig.bone_names()[-1]
+            page.get_by_role("combobox").first.click()
+            page.get_by_role("option", name=last).click()
+            page.wait_for_function("n => document.body.innerText.includes(n)", arg=f"Bone {rig.bone_count}:")
+            assert app.selected == rig.bone_count - 1
+            slider = page.get_by_role("slider").nth(2)
+            slider.focus()
+            for _ in range(25):
+                slider.press("ArrowRight")
+            page.wait_for_function(
+                "o => { const t = document.body.innerText.match(/Objective:\\s*([-+0-9.eE]+)/);"
+                " return t && Math.abs(parseFloat(t[1]) - o) > 1e-9; }", arg=rest_objective, timeout=30000)
+            app.wait_idle()
+            assert np.degrees(app.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            moved_text = energies.inner_text()
+            assert _number(moved_text, "Objective") != rest_objective
+            assert _number(moved_text, "ARAP term") > _number(rest_text, "ARAP term")
+
+            # back to rest, then a small search from the panel
+            page.get_by_role("button", name="Reset to rest pose").click()
+            page.wait_for_function("c => document.body.innerText.includes('Support (column): ' + c)",
+                                   arg=format(rest_column, ".4g"), timeout=30000)
+            for label, value in (("Particles", "20"), ("Iterations", "10")):
+                box = page.get_by_label(label)
+                box.fill(value)
+                box.press("Tab")
+            page.wait_for_timeout(300)
+            assert app.optimise_settings()["particles"] == 20
+            assert app.optimise_settings()["iterations"] == 10
+            page.get_by_role("button", name="Optimise").click()
+            page.get_by_text(re.compile("search finished")).wait_for(timeout=300000)
+            assert "iteration 10 / 10" in page.locator("body").inner_text()
+            app.wait_idle()
+            page.wait_for_timeout(1500)
+            done_text = energies.inner_text()
+            assert _number(done_text, "Support (column)") < rest_column
+            assert "less than rest" in done_text
+            # a clean picture: no software-WebGL notice, panel scrolled to the energies
+            for close in page.locator(".mantine-Notification-root button").all():
+                close.click()
+            page.get_by_text("Status:").scroll_into_view_if_needed()
+            page.wait_for_timeout(1000)
+            ARTIFACTS.mkdir(exist_ok=True)
+            page.screenshot(path=str(ARTIFACTS / "ui.png"))
+            browser.close()
+    finally:
+        app.stop()
+    assert not errors, errors
