@@ -357,3 +357,18 @@ def test_parse_up_2d_and_errors():
             io.parse_up(bad)
     with pytest.raises(sl.InputError, match="in the plane"):
         io.parse_up("z", dim=2)
+
+
+def test_written_files_respect_the_umask(tmp_path, branch_mesh):
+    """Atomic writes must give the permissions a plain open() would (0666 & ~umask), not mkstemp's 0600."""
+    import os
+    import stat
+
+    old = os.umask(0o022)
+    try:
+        sl.write_mesh(tmp_path / "m.stl", *branch_mesh)
+        io.write_text(tmp_path / "t.txt", "x")
+    finally:
+        os.umask(old)
+    for name in ("m.stl", "t.txt"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644, name

@@ -258,3 +258,17 @@ def test_woody2d_poses_rotate_in_the_plane(woody_rig):
     R = kin.planar_rotation(0.3)
     hips = rig.joints[0]
     np.testing.assert_allclose(rig.pose(a3), (rig.vertices - hips) @ R.T + hips, atol=1e-9)
+
+
+def test_changed_tet_mesh_misses_the_cache(tmp_path, branch_files, branch_rig):
+    """Moving an interior vertex of a precomputed tet mesh must give another rig, not the cached one."""
+    tets = tmp_path / "branch.mesh"
+    write_tet_mesh(tets, branch_rig.tet_vertices, branch_rig.tets)
+    cache = tmp_path / "cache"
+    first = sl.load_rig(branch_files["mesh"], branch_files["skeleton"], tets=tets, cache_dir=cache)
+    TV = branch_rig.tet_vertices.copy()
+    TV[len(branch_rig.vertices) + 20] += [0.3, 0.2, 0.1]  # an interior vertex, same connectivity
+    write_tet_mesh(tets, TV, branch_rig.tets)
+    second = sl.load_rig(branch_files["mesh"], branch_files["skeleton"], tets=tets, cache_dir=cache)
+    assert second.info["from_cache"] is False
+    assert not np.array_equal(second.tet_vertices, first.tet_vertices)
