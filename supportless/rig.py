@@ -28,7 +28,7 @@ from .errors import InputError
 from .io import atomic_path, check_closed_surface, parse_up, read_dmat, read_mesh, read_tet_mesh, read_tgf
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 
 #: Default settings of the weight computation.
 SAMPLES_PER_BONE = 10
@@ -178,6 +178,8 @@ def _check_inputs(V, F, joints, bones, mesh_path=None, skel_path=None):
     """Validate and normalise arrays; returns (V, F, joints, dim)."""
     if len(bones) == 0:
         raise InputError(skel_path, "skeleton has no bones")
+    if len(F) == 0 or len(V) == 0:
+        raise InputError(mesh_path, "the mesh has no triangles")
     if bones.min() < 0 or bones.max() >= len(joints):
         raise InputError(skel_path, f"a bone refers to a joint out of range 0..{len(joints) - 1}")
     if F.min() < 0 or F.max() >= len(V):
@@ -355,7 +357,9 @@ def _attach_surface(V, TV, TT, path):
     order = np.concatenate([idx, rest])
     inverse = np.empty_like(order)
     inverse[order] = np.arange(len(order))
-    return TV[order], inverse[TT], order
+    TV = TV[order]
+    TV[: len(V)] = V  # exactly the surface, not just within tolerance
+    return TV, inverse[TT], order
 
 
 # --------------------------------------------------------------------------- #
@@ -432,7 +436,9 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
             raise InputError(weights, "precomputed weights need the tet mesh they were computed on (--tets)")
         W = read_dmat(weights, (len(tet_arrays[0]), len(B)))
     if tet_arrays is not None:
-        settings["tets"] = hashlib.sha256(np.ascontiguousarray(tet_arrays[1]).tobytes()).hexdigest()
+        h = hashlib.sha256(np.ascontiguousarray(tet_arrays[0], np.float64).tobytes())
+        h.update(np.ascontiguousarray(tet_arrays[1], np.int64).tobytes())
+        settings["tets"] = h.hexdigest()
     if W is not None:
         settings["weights"] = hashlib.sha256(W.tobytes()).hexdigest()
     up_key = np.asarray(parse_up(up), np.float64)
