@@ -301,6 +301,24 @@ def test_page_in_chromium(rig, tmp_path):
             assert _number(moved_text, "Objective") != rest_objective
             assert _number(moved_text, "ARAP term") > _number(rest_text, "ARAP term")
 
+            # a pose for another skeleton, uploaded through the page: an error in the page, nothing breaks
+            bad = tmp_path / "other-skeleton.json"
+            bones = _other_bones(rig)
+            sio.write_pose(bad, np.zeros((len(bones), 3)), bones)
+            page.locator("input[type=file]").set_input_files(str(bad))
+            page.get_by_text(re.compile("Error:.*skeleton")).first.wait_for(timeout=30000)
+            assert np.degrees(app.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            # the posed mesh as an STL download
+            page.get_by_text("Files", exact=True).click()
+            with page.expect_download(timeout=30000) as dl:
+                page.get_by_role("button", name="Download STL").click()
+            stl = tmp_path / "dl.stl"
+            dl.value.save_as(stl)
+            import trimesh
+
+            assert len(trimesh.load(stl, force="mesh").faces) == len(rig.faces)
+            page.get_by_text("Files", exact=True).click()
+
             # back to rest, then a small search from the panel
             page.get_by_role("button", name="Reset to rest pose").click()
             page.wait_for_function("c => document.body.innerText.includes('Support (column): ' + c)",

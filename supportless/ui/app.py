@@ -625,8 +625,7 @@ class App:
             side="double" if self._dim == 2 else "front", flat_shading=False)
         self._mesh_opacity = 0.55
         self.h_weights = None
-        self.h_risky = [None, None, None]
-        self.h_intersect = None
+        self._overlays: dict = {}
         self.h_risky_edges = None
 
         # skeleton
@@ -990,37 +989,52 @@ class App:
             if risky.any():
                 top = max(float(need[risky].max()), 1e-30)
                 level = np.digitize(need / top, [1 / 3, 2 / 3])
-            for k in range(3):
-                sel = risky & (level == k)
-                name = f"/model/risky{k}"
-                if sel.any():
-                    tri = (np.stack([a[sel], b[sel], c[sel]], 1) + eps * n[sel][:, None, :]).reshape(-1, 3)
-                    self.h_risky[k] = s.add_mesh_simple(name, tri.astype(np.float32),
-                                                        np.arange(len(tri), dtype=np.uint32).reshape(-1, 3),
-                                                        color=RISKY_COLORS[k], flat_shading=True)
-                elif self.h_risky[k] is not None:
-                    self.h_risky[k].remove()
-                    self.h_risky[k] = None
+
+            def lifted(sel, k):  # the selected faces, lifted off the surface so they show on top
+                return (np.stack([a[sel], b[sel], c[sel]], 1) + k * eps * n[sel][:, None, :]).reshape(-1, 3)
+
             inter = meas.get("intersecting")
-            if inter is not None and len(inter) and not weights_view:
-                sel = np.zeros(len(F), bool)
-                sel[inter] = True
-                tri = (np.stack([a[sel], b[sel], c[sel]], 1) + 1.5 * eps * n[sel][:, None, :]).reshape(-1, 3)
-                self.h_intersect = s.add_mesh_simple("/model/intersections", tri.astype(np.float32),
-                                                     np.arange(len(tri), dtype=np.uint32).reshape(-1, 3),
-                                                     color=INTERSECT_COLOR, flat_shading=True, side="double")
-            elif self.h_intersect is not None:
-                self.h_intersect.remove()
-                self.h_intersect = None
+            inter_sel = np.zeros(len(F), bool)
+            if inter is not None and not weights_view:
+                inter_sel[inter] = True
+            with self.server.atomic():
+                for k in range(3):
+                    self._overlay(f"risky{k}", lifted(risky & (level == k), 1.0), RISKY_COLORS[k])
+                self._overlay("intersections", lifted(inter_sel, 1.5), INTERSECT_COLOR, side="double")
         else:
             E = self._edges
             risky = meas["risky"] if show_risky else np.zeros(len(E), bool)
+            h = self.h_risky_edges
             if risky.any():
-                self.h_risky_edges = s.add_line_segments("/model/risky_edges", V3[E[risky]].astype(np.float32),
-                                                         colors=RISKY_COLORS[2], thickness=0.01 * self._diag)
-            elif self.h_risky_edges is not None:
-                self.h_risky_edges.remove()
-                self.h_risky_edges = None
+                pts = V3[E[risky]].astype(np.float32)
+                cols = np.broadcast_to(np.asarray(RISKY_COLORS[2], np.uint8), pts.shape).copy()
+                if h is None:
+                    self.h_risky_edges = s.add_line_segments("/model/risky_edges", pts, colors=cols,
+                                                             thickness=0.01 * self._diag)
+                else:
+                    with self.server.atomic():
+                        h.points, h.colors, h.visible = pts, cols, True
+            elif h is not None:
+                h.visible = False
+
+    def _overlay(self, key: str, tri: np.ndarray, color, side: str = "front") -> None:
+        """Show triangles ``tri`` (3k, 3) as a single-colour overlay node, reusing the node."""
+        h = self._overlays.get(key)
+        if len(tri) == 0:
+            if h is not None and h.visible:
+                h.visible = False
+            return
+        V = np.ascontiguousarray(tri, np.float32)
+        F = np.arange(len(V), dtype=np.uint32).reshape(-1, 3)
+        if h is None:
+            self._overlays[key] = self.server.scene.add_mesh_simple(f"/model/{key}", V, F, color=color,
+                                                                    flat_shading=True, side=side)
+            return
+        h.vertices = V  # fresh arrays: viser sends what changed
+        if len(h.faces) != len(F):
+            h.faces = F
+        if not h.visible:
+            h.visible = True
 
     def _measures_markdown(self, m: dict) -> str:
         t = m["terms"]
