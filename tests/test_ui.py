@@ -6,10 +6,8 @@ The browser test saves a screenshot to ``test-artifacts/ui.png``.
 
 from __future__ import annotations
 
-import json
 import re
 import socket
-import threading
 from pathlib import Path
 
 import numpy as np
