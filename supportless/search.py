@@ -203,7 +203,6 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
         while p >= 0:
             fixed[p] = True
             p = rig.parents[p]
-    fixed[:] = fixed  # ancestors of plate bones
     for names, value in ((fix, True), (free, False)):
         for name in names or []:
             if str(name).lower() == "all":
