@@ -61,11 +61,15 @@ class Objective:
         plate. Slicers lay interface and base layers under every supported
         area however short the column, which the prism and column volumes do
         not count; 0 (the default) is the paper's energy.
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels, parallel over poses; ``numpy``: the plain
+        numpy implementations of the energies (slow; the reference).
     """
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
-                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION, overhang_offset: float = 0.0):
+                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION, overhang_offset: float = 0.0,
+                 backend: str = "fast"):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -77,6 +81,9 @@ class Objective:
         self.clusters = clusters
         self.resolution = int(resolution)
         self.overhang_offset = float(overhang_offset)
+        if backend not in ("fast", "numpy"):
+            raise ValueError(f"backend must be 'fast' or 'numpy', not {backend!r}")
+        self.backend = backend
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -109,9 +116,10 @@ class Objective:
     def overhang(self, vertices: np.ndarray) -> np.ndarray:
         """Raw overhang estimate of posed vertices, (P,) or float."""
         if self.overhang_model == "column":
-            value = support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution)
+            value = support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
+                                   backend=self.backend)
         else:
-            value = overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle)
+            value = overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend)
         if self.overhang_offset > 0:
             value = value + self.overhang_offset * self.height * projected_risky_area(
                 vertices, self.rig.faces, self.rig.up, self.overhang_angle)
@@ -134,9 +142,10 @@ class Objective:
 
         V = skin(self.rig.lbs, transforms)
         return {
-            "arap": arap_mod.arap_energy(self.arap_data, transforms),
+            "arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
             "overhang": self.overhang(V),
-            "intersection": self_intersection_volume(V, self.rig.faces, self.rig.up, self.resolution),
+            "intersection": self_intersection_volume(V, self.rig.faces, self.rig.up, self.resolution,
+                                                     backend=self.backend),
         }
 
     def normalise(self, raw: dict) -> dict:

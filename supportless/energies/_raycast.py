@@ -27,6 +27,7 @@ exactly once.  In 2D the same idea reduces to half-open intervals
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -44,6 +45,8 @@ __all__ = [
     "orientation_sign",
     "boundary_edges",
     "ray_grid",
+    "BACKENDS",
+    "check_backend",
 ]
 
 
@@ -137,7 +140,16 @@ def to_frame(V, up):
     return np.ascontiguousarray(V @ R.T)
 
 
-def orientation_sign(V, F):
+BACKENDS = ("fast", "numpy")
+
+
+def check_backend(backend):
+    """Raise ValueError unless ``backend`` is ``"fast"`` (numba) or ``"numpy"``."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
+
+
+def orientation_sign(V, F, backend="fast"):
     """Sign of the total signed volume (3D) or signed area (2D) per pose.
 
     Parameters
@@ -155,7 +167,14 @@ def orientation_sign(V, F):
     """
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
-    if V.shape[-1] == 3:
+    if backend == "numpy":
+        a, b, c = V[:, F[:, 0]], V[:, F[:, 1]], V[:, F[:, 2]]
+        if V.shape[-1] == 3:
+            tot = np.einsum("pfi,pfi->p", a, np.cross(b, c)) / 6.0
+        else:
+            e1, e2 = b - a, c - a
+            tot = 0.5 * np.sum(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0], axis=-1)
+    elif V.shape[-1] == 3:
         tot = _signed_volume3(V, F)
     else:
         tot = _signed_area2(V, F)
@@ -543,7 +562,302 @@ def _grid2_batch(X, E, orient, R, tau):
     return out
 
 
-def ray_grid(V, F, up, resolution, tau):
+# ---------------------------------------------------------------------------
+# fast 3D kernel
+# ---------------------------------------------------------------------------
+
+#: Margin, in cells, around the floating-point row spans of a triangle within
+#: which pixel centres get the exact (tie-broken) inside test; rounding of the
+#: spans is ~1e-13 cells, so every decision is the exact test's.
+_SPAN_EPS = 1e-6
+
+
+@njit(cache=True, inline="always")
+def _frame_bbox3(X):
+    umin = np.inf
+    umax = -np.inf
+    wmin = np.inf
+    wmax = -np.inf
+    zplate = np.inf
+    for i in range(X.shape[0]):
+        u = X[i, 0]
+        w = X[i, 1]
+        umin = min(umin, u)
+        umax = max(umax, u)
+        wmin = min(wmin, w)
+        wmax = max(wmax, w)
+        zplate = min(zplate, X[i, 2])
+    return umin, umax, wmin, wmax, zplate
+
+
+@njit(cache=True)
+def _inside_tri(ax, ay, bx, by, cx, cy, ccw, px, py):
+    """Exact, tie-broken test of a pixel centre against a projected triangle
+    (the same edge functions as :func:`_pose3`)."""
+    if ccw:
+        o1x, o1y, d1x, d1y, f1, t1 = _edge(ax, ay, bx, by)
+        o2x, o2y, d2x, d2y, f2, t2 = _edge(bx, by, cx, cy)
+        o3x, o3y, d3x, d3y, f3, t3 = _edge(cx, cy, ax, ay)
+    else:
+        o1x, o1y, d1x, d1y, f1, t1 = _edge(bx, by, ax, ay)
+        o2x, o2y, d2x, d2y, f2, t2 = _edge(cx, cy, bx, by)
+        o3x, o3y, d3x, d3y, f3, t3 = _edge(ax, ay, cx, cy)
+    return (_inside(o1x, o1y, d1x, d1y, f1, t1, px, py) and _inside(o2x, o2y, d2x, d2y, f2, t2, px, py)
+            and _inside(o3x, o3y, d3x, d3y, f3, t3, px, py))
+
+
+@njit(cache=True, inline="always")
+def _slope(px, py, qx, qy, ccw):
+    """Row-span bound of the directed edge p->q of a triangle: ``(x at y=0 of
+    the edge line, dx/dy, kind)``, kind +1 for an upper bound of x, -1 for a
+    lower bound, 0 for an edge parallel to the rows."""
+    dy = qy - py
+    if dy == 0.0:
+        return 0.0, 0.0, 0
+    sl = (qx - px) / dy
+    kind = 1 if (dy > 0.0) == ccw else -1
+    return px - py * sl, sl, kind
+
+
+@njit(cache=True)
+def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac):
+    """One pose of the ray grid: same grid, crossings and sweep as :func:`_pose3`.
+
+    Differences (none changes the result): candidate pixels are the centres in
+    each triangle's row spans, found in floating point with a margin of
+    ``_SPAN_EPS`` cells, the exact tie-broken test deciding every centre within
+    the margin (rounding of the spans is ~1e-13 cells, so all decisions are
+    the exact test's); buffers come from the caller; and when ``support`` is
+    False only rays with 4 or more crossings are swept (a ray crossing a
+    closed surface twice is never inside two layers).
+
+    Returns ``(intersection, support, ok)``; ``ok`` is False when the crossings
+    do not fit in the buffers (the caller then uses :func:`_pose3`).
+    """
+    eps = _SPAN_EPS
+    umin, umax, wmin, wmax, zplate = _frame_bbox3(X)
+    du = umax - umin
+    dw = wmax - wmin
+    L = max(du, dw)
+    if not (L > 0.0) or F.shape[0] == 0:
+        return 0.0, 0.0, True
+    cell = L / R
+    inv = 1.0 / cell
+    nx = max(1, int(np.ceil(du / cell - 1e-9)))
+    ny = max(1, int(np.ceil(dw / cell - 1e-9)))
+    u0 = umin + 0.5 * (du - nx * cell)
+    w0 = wmin + 0.5 * (dw - ny * cell)
+    npix = nx * ny
+    cap = pix.shape[0]
+    ucap = ubuf.shape[0]
+    for q in range(npix):
+        cnt[q] = 0
+    m = 0
+    nu = 0
+    for f in range(F.shape[0]):
+        i0 = F[f, 0]
+        i1 = F[f, 1]
+        i2 = F[f, 2]
+        ay = X[i0, 1]
+        by = X[i1, 1]
+        cy = X[i2, 1]
+        sj_lo = (min(ay, min(by, cy)) - w0) * inv - 0.5
+        sj_hi = (max(ay, max(by, cy)) - w0) * inv - 0.5
+        j_lo = max(0, int(np.ceil(sj_lo - eps)))
+        j_hi = min(ny - 1, int(np.floor(sj_hi + eps)))
+        if j_hi < j_lo:
+            continue
+        ax = X[i0, 0]
+        bx = X[i1, 0]
+        cx = X[i2, 0]
+        lo_u = min(ax, min(bx, cx))
+        hi_u = max(ax, max(bx, cx))
+        i_lo = max(0, int(np.ceil((lo_u - u0) * inv - 0.5 - eps)))
+        i_hi = min(nx - 1, int(np.floor((hi_u - u0) * inv - 0.5 + eps)))
+        if i_hi < i_lo:
+            continue
+        az = X[i0, 2]
+        e1x = bx - ax
+        e1y = by - ay
+        e1z = X[i1, 2] - az
+        e2x = cx - ax
+        e2y = cy - ay
+        e2z = X[i2, 2] - az
+        nzv = e1x * e2y - e1y * e2x  # = doubled signed projected area
+        if nzv == 0.0:
+            continue
+        nxv = e1y * e2z - e1z * e2y
+        nyv = e1z * e2x - e1x * e2z
+        # 0: leaving material, 1: entering, 2: entering through a risky face
+        code = 0
+        if orient * nzv < 0.0:
+            code = 1
+            if support:
+                nlen = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
+                if orient * nzv / nlen < -tau:
+                    code = 2
+        gx = -nxv / nzv
+        gy = -nyv / nzv
+        ccw = nzv > 0.0
+        # float edge functions in cell units, inside > 0 (vertices taken
+        # counter-clockwise); a centre within `tol` of an edge gets the exact test
+        pa_u = (ax - u0) * inv - 0.5
+        pa_w = (ay - w0) * inv - 0.5
+        if ccw:
+            pb_u = (bx - u0) * inv - 0.5
+            pb_w = (by - w0) * inv - 0.5
+            pc_u = (cx - u0) * inv - 0.5
+            pc_w = (cy - w0) * inv - 0.5
+        else:
+            pc_u = (bx - u0) * inv - 0.5
+            pc_w = (by - w0) * inv - 0.5
+            pb_u = (cx - u0) * inv - 0.5
+            pb_w = (cy - w0) * inv - 0.5
+        d1u = pb_u - pa_u
+        d1w = pb_w - pa_w
+        d2u = pc_u - pb_u
+        d2w = pc_w - pb_w
+        d3u = pa_u - pc_u
+        d3w = pa_w - pc_w
+        tol1 = eps * (abs(d1u) + abs(d1w)) + 1e-9
+        tol2 = eps * (abs(d2u) + abs(d2w)) + 1e-9
+        tol3 = eps * (abs(d3u) + abs(d3w)) + 1e-9
+        for j in range(j_lo, j_hi + 1):
+            py = w0 + (j + 0.5) * cell
+            e1 = d1u * (j - pa_w) - d1w * (i_lo - pa_u)
+            e2 = d2u * (j - pb_w) - d2w * (i_lo - pb_u)
+            e3 = d3u * (j - pc_w) - d3w * (i_lo - pc_u)
+            row = j * nx
+            for i in range(i_lo, i_hi + 1):
+                # branch-free: keep the candidate when it is not surely
+                # outside, remember it when it is not surely inside either
+                sure = (e1 > tol1) * (e2 > tol2) * (e3 > tol3)
+                maybe = (e1 >= -tol1) * (e2 >= -tol2) * (e3 >= -tol3)
+                e1 -= d1w
+                e2 -= d2w
+                e3 -= d3w
+                if m == cap or nu == ucap:
+                    return 0.0, 0.0, False
+                q = row + i
+                pix[m] = q
+                zz[m] = az + gx * (u0 + (i + 0.5) * cell - ax) + gy * (py - ay)
+                cc[m] = code
+                if maybe != sure:  # rare
+                    ubuf[nu] = m
+                    ufac[nu] = f
+                    nu += 1
+                cnt[q] += maybe
+                m += maybe
+    # exact, tie-broken test of the centres close to an edge
+    for k in range(nu):
+        t = ubuf[k]
+        f = ufac[k]
+        q = pix[t]
+        i0 = F[f, 0]
+        i1 = F[f, 1]
+        i2 = F[f, 2]
+        ax = X[i0, 0]
+        ay = X[i0, 1]
+        bx = X[i1, 0]
+        by = X[i1, 1]
+        cx = X[i2, 0]
+        cy = X[i2, 1]
+        ccw = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.0
+        px = u0 + (q % nx + 0.5) * cell
+        py = w0 + (q // nx + 0.5) * cell
+        if not _inside_tri(ax, ay, bx, by, cx, cy, ccw, px, py):
+            cc[t] = -1
+            cnt[q] -= 1
+    # bucket the crossings of the rays that need a sweep (counting sort; the
+    # order within a ray stays the face order, as in _sweep)
+    kmin = 2 if support else 4
+    total = 0
+    for q in range(npix):
+        start[q] = total
+        if cnt[q] >= kmin:
+            total += cnt[q]
+    for k in range(m):
+        q = pix[k]
+        if cnt[q] >= kmin and cc[k] >= 0:
+            t = start[q]
+            zs[t] = zz[k]
+            cs[t] = cc[k]
+            start[q] = t + 1
+    inter = 0.0
+    sup = 0.0
+    for q in range(npix):
+        n = cnt[q]
+        if n < kmin:
+            continue
+        s1 = start[q]
+        s0 = s1 - n
+        for i in range(s0 + 1, s1):
+            zk = zs[i]
+            ck = cs[i]
+            j = i - 1
+            while j >= s0 and zs[j] > zk:
+                zs[j + 1] = zs[j]
+                cs[j + 1] = cs[j]
+                j -= 1
+            zs[j + 1] = zk
+            cs[j + 1] = ck
+        count = 0
+        zprev = zplate
+        for k in range(s0, s1):
+            z = zs[k]
+            c = cs[k]
+            if count >= 2:
+                inter += z - zprev
+            if c > 0:  # entering material
+                if count <= 0 and c == 2:
+                    lo = zs[k - 1] if k > s0 else zplate
+                    if z > lo:
+                        sup += z - lo
+                count += 1
+            else:
+                count -= 1
+            zprev = z
+    area = cell * cell
+    return inter * area, sup * area, True
+
+
+@njit(cache=True, parallel=True)
+def _grid3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac):
+    P = X.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    ok = np.ones(P, np.bool_)
+    for p in prange(P):
+        t = numba.get_thread_id()
+        a, b, good = _pose3_fast(X[p], F, orient[p], R, tau, support, pix[t], zz[t], cc[t], cnt[t], start[t],
+                                 zs[t], cs[t], ubuf[t], ufac[t])
+        out[p, 0] = a
+        out[p, 1] = b
+        ok[p] = good
+    return out, ok
+
+
+def _ray_grid3_fast(X, F, orient, R, tau, support):
+    """Fast kernel over a batch; poses overflowing its buffers go to :func:`_grid3_batch`."""
+    threads = numba.config.NUMBA_NUM_THREADS
+    npix = R * R
+    cap = 8 * npix + 1024
+    pix = np.empty((threads, cap), np.int32)
+    zz = np.empty((threads, cap), np.float64)
+    cc = np.empty((threads, cap), np.int8)
+    zs = np.empty((threads, cap), np.float64)
+    cs = np.empty((threads, cap), np.int8)
+    cnt = np.empty((threads, npix), np.int32)
+    start = np.empty((threads, npix), np.int64)
+    ubuf = np.empty((threads, npix), np.int64)
+    ufac = np.empty((threads, npix), np.int64)
+    out, ok = _grid3_fast(X, F, orient, R, float(tau), bool(support), pix, zz, cc, cnt, start, zs, cs, ubuf, ufac)
+    if not ok.all():
+        bad = np.flatnonzero(~ok)
+        out[bad] = _grid3_batch(np.ascontiguousarray(X[bad]), F, np.ascontiguousarray(orient[bad]), R, float(tau))
+    return out
+
+
+def ray_grid(V, F, up, resolution, tau, backend="fast", support=True):
     """Cast the ray grid for a batch of poses.
 
     Parameters
@@ -570,9 +884,155 @@ def ray_grid(V, F, up, resolution, tau):
     R = int(resolution)
     if R < 1:
         raise ValueError("resolution must be a positive integer")
-    orient = np.ascontiguousarray(orientation_sign(V, F))
+    check_backend(backend)
+    orient = np.ascontiguousarray(orientation_sign(V, F, backend))
     X = to_frame(V, up)
+    if backend == "numpy":
+        if V.shape[-1] == 3:
+            return np.array([_pose3_numpy(x, F, o, R, float(tau), support) for x, o in zip(X, orient)]).reshape(-1, 2)
+        E = boundary_edges(F)
+        return np.array([_pose2_numpy(x, E, o, R, float(tau)) for x, o in zip(X, orient)]).reshape(-1, 2)
     if V.shape[-1] == 3:
-        return _grid3_batch(X, F, orient, R, float(tau))
+        return _ray_grid3_fast(X, F, orient, R, tau, support)
     E = boundary_edges(F)
     return _grid2_batch(X, E, orient, R, float(tau))
+
+
+# ---------------------------------------------------------------------------
+# plain numpy reference implementation (backend="numpy")
+# ---------------------------------------------------------------------------
+
+
+def _edges_numpy(ax, ay, bx, by):
+    """Vectorised :func:`_edge`: canonical (ox, oy, dx, dy, flip, tie) per edge."""
+    swap = (bx < ax) | ((bx == ax) & (by < ay))
+    ox = np.where(swap, bx, ax)
+    oy = np.where(swap, by, ay)
+    dx = np.where(swap, ax, bx) - ox
+    dy = np.where(swap, ay, by) - oy
+    flip = np.where(swap, -1.0, 1.0)
+    tie = np.where(dy != 0.0, -dy, dx)
+    return ox, oy, dx, dy, flip, tie
+
+
+def _inside_numpy(edge, px, py):
+    ox, oy, dx, dy, flip, tie = edge
+    e = dx * (py - oy) - dy * (px - ox)
+    e = np.where(e == 0.0, tie, e)
+    return e * flip > 0.0
+
+
+def _sweep_numpy(pix, z, code, zplate):
+    """Sort crossings by (pixel, height) and sweep every ray at once.
+
+    ``code``: 0 leaving, 1 entering, 2 entering through a risky face.
+    Returns (summed length inside >= 2 layers, summed support column length).
+    """
+    if pix.size == 0:
+        return 0.0, 0.0
+    order = np.lexsort((z, pix))  # stable: ties keep face order, like the kernels
+    pix, z, code = pix[order], z[order], code[order]
+    step = np.where(code > 0, 1, -1)
+    first = np.ones(pix.size, bool)
+    first[1:] = pix[1:] != pix[:-1]
+    group = np.cumsum(first) - 1
+    before = np.cumsum(step) - step  # running count before each crossing, all rays
+    before = before - before[first][group]  # ... restarted at each ray
+    zprev = np.empty_like(z)
+    zprev[0] = zplate
+    zprev[1:] = z[:-1]
+    zprev[first] = zplate
+    inter = float(np.sum(np.where(before >= 2, z - zprev, 0.0)))
+    col = (code == 2) & (before <= 0) & (z > zprev)
+    sup = float(np.sum(z[col] - zprev[col]))
+    return inter, sup
+
+
+def _pose3_numpy(X, F, orient, R, tau, support=True):
+    """:func:`_pose3` in numpy: every (face, pixel of its bounding box) pair at once."""
+    umin, wmin, zplate = X.min(axis=0)
+    umax, wmax, _ = X.max(axis=0)
+    du = umax - umin
+    dw = wmax - wmin
+    L = max(du, dw)
+    if not (L > 0.0) or F.shape[0] == 0:
+        return 0.0, 0.0
+    cell = L / R
+    nx = max(1, int(np.ceil(du / cell - 1e-9)))
+    ny = max(1, int(np.ceil(dw / cell - 1e-9)))
+    u0 = umin + 0.5 * (du - nx * cell)
+    w0 = wmin + 0.5 * (dw - ny * cell)
+    A, B, C = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
+    e1 = B - A
+    e2 = C - A
+    nzv = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    keep = nzv != 0.0
+    A, B, C, e1, e2, nzv = A[keep], B[keep], C[keep], e1[keep], e2[keep], nzv[keep]
+    nxv = e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1]
+    nyv = e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2]
+    code = np.where(orient * nzv < 0.0, 1, 0).astype(np.int8)
+    if support:
+        cosf = orient * nzv / np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
+        code[(code == 1) & (cosf < -tau)] = 2
+    gx = -nxv / nzv
+    gy = -nyv / nzv
+    lo = np.minimum(np.minimum(A, B), C)
+    hi = np.maximum(np.maximum(A, B), C)
+    i_lo = np.maximum(0, np.floor((lo[:, 0] - u0) / cell - 0.5).astype(np.int64))
+    i_hi = np.minimum(nx - 1, np.ceil((hi[:, 0] - u0) / cell - 0.5).astype(np.int64))
+    j_lo = np.maximum(0, np.floor((lo[:, 1] - w0) / cell - 0.5).astype(np.int64))
+    j_hi = np.minimum(ny - 1, np.ceil((hi[:, 1] - w0) / cell - 0.5).astype(np.int64))
+    ni = np.maximum(i_hi - i_lo + 1, 0)
+    nj = np.maximum(j_hi - j_lo + 1, 0)
+    count = ni * nj
+    # candidate (face, pixel) pairs: the pixel centres in each face's bounding box
+    f = np.repeat(np.arange(len(count)), count)
+    off = np.arange(f.size) - np.repeat(np.cumsum(count) - count, count)
+    i = i_lo[f] + off % ni[f]
+    j = j_lo[f] + off // ni[f]
+    px = u0 + (i + 0.5) * cell
+    py = w0 + (j + 0.5) * cell
+    # edges with the inside on the left (reverse the triangle when clockwise)
+    pos = nzv[f] > 0.0
+    a = np.where(pos[:, None], A[f], B[f])
+    b = np.where(pos[:, None], B[f], A[f])
+    c = C[f]
+    inside = (_inside_numpy(_edges_numpy(a[:, 0], a[:, 1], b[:, 0], b[:, 1]), px, py)
+              & _inside_numpy(_edges_numpy(b[:, 0], b[:, 1], c[:, 0], c[:, 1]), px, py)
+              & _inside_numpy(_edges_numpy(c[:, 0], c[:, 1], a[:, 0], a[:, 1]), px, py))
+    f, px, py, i, j = f[inside], px[inside], py[inside], i[inside], j[inside]
+    z = A[f, 2] + gx[f] * (px - A[f, 0]) + gy[f] * (py - A[f, 1])
+    inter, sup = _sweep_numpy(j * nx + i, z, code[f], zplate)
+    area = cell * cell
+    return inter * area, sup * area
+
+
+def _pose2_numpy(X, E, orient, R, tau):
+    """:func:`_pose2` in numpy."""
+    umin, zplate = X.min(axis=0)
+    umax = X[:, 0].max()
+    L = umax - umin
+    if not (L > 0.0) or E.shape[0] == 0:
+        return 0.0, 0.0
+    cell = L / R
+    a, b = X[E[:, 0]], X[E[:, 1]]
+    ex = b[:, 0] - a[:, 0]
+    keep = ex != 0.0
+    a, b, ex = a[keep], b[keep], ex[keep]
+    ez = b[:, 1] - a[:, 1]
+    cosf = -orient * ex / np.sqrt(ex * ex + ez * ez)
+    code = np.where(cosf < 0.0, np.where(cosf < -tau, 2, 1), 0).astype(np.int8)
+    lo = np.minimum(a[:, 0], b[:, 0])
+    hi = np.maximum(a[:, 0], b[:, 0])
+    slope = ez / ex
+    i_lo = np.maximum(0, np.floor((lo - umin) / cell - 0.5).astype(np.int64))
+    i_hi = np.minimum(R - 1, np.ceil((hi - umin) / cell - 0.5).astype(np.int64))
+    count = np.maximum(i_hi - i_lo + 1, 0)
+    e = np.repeat(np.arange(len(count)), count)
+    i = i_lo[e] + np.arange(e.size) - np.repeat(np.cumsum(count) - count, count)
+    px = umin + (i + 0.5) * cell
+    ok = (px >= lo[e]) & (px < hi[e])
+    e, i, px = e[ok], i[ok], px[ok]
+    z = a[e, 1] + slope[e] * (px - a[e, 0])
+    inter, sup = _sweep_numpy(i, z, code[e], zplate)
+    return inter * cell, sup * cell

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._raycast import boundary_edges, orientation_sign, prepare
+from ._raycast import boundary_edges, check_backend, orientation_sign, prepare
 
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "boundary_edges"]
 
@@ -107,12 +107,48 @@ def _kernel2(V, E, up, orient, tau, mask):
     return out
 
 
-def _compute(vertices, faces, up, overhang_angle):
+def _numpy(V, F, u, orient, tau):
+    """Plain numpy version of the kernels: ((P, 2) [energy, risky measure], mask)."""
+    P = V.shape[0]
+    d = V.shape[-1]
+    E = F if d == 3 else boundary_edges(F)
+    out = np.zeros((P, 2))
+    mask = np.zeros((P, E.shape[0]), np.bool_)
+    chunk = max(1, 2_000_000 // max(1, E.shape[0]))
+    for s in range(0, P, chunk):  # bounded memory: poses in chunks
+        X = V[s:s + chunk]
+        o = orient[s:s + chunk, None]
+        plate = (X @ u).min(axis=1)[:, None]
+        if d == 3:
+            a, b, c = X[:, E[:, 0]], X[:, E[:, 1]], X[:, E[:, 2]]
+            n = np.cross(b - a, c - a)  # doubled area times unit normal
+            size = np.linalg.norm(n, axis=-1)
+            proj = o * (n @ u)
+            h = ((a + b + c) @ u) / 3.0 - plate
+            scale = 0.5
+        else:
+            a, b = X[:, E[:, 0]], X[:, E[:, 1]]
+            t = b - a
+            size = np.linalg.norm(t, axis=-1)
+            proj = o * (t[..., 1] * u[0] - t[..., 0] * u[1])  # outward normal (ty, -tx)
+            h = 0.5 * ((a + b) @ u) - plate
+            scale = 1.0
+        risky = (size > 0.0) & (proj < -tau * size)
+        out[s:s + chunk, 0] = np.sum(np.where(risky, -scale * proj * h, 0.0), axis=1)
+        out[s:s + chunk, 1] = np.sum(np.where(risky, scale * size, 0.0), axis=1)
+        mask[s:s + chunk] = risky
+    return out, mask
+
+
+def _compute(vertices, faces, up, overhang_angle, backend="fast"):
     """Run the kernel: returns ((P, 2) [energy, risky measure], mask, single)."""
+    check_backend(backend)
     V, F, u, single = prepare(vertices, faces, up)
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
-    orient = orientation_sign(V, F)
-    if V.shape[-1] == 3:
+    orient = orientation_sign(V, F, backend)
+    if backend == "numpy":
+        out, mask = _numpy(V, F, u, orient, tau)
+    elif V.shape[-1] == 3:
         mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
         out = _kernel3(V, F, u, orient, tau, mask)
     else:
@@ -126,7 +162,7 @@ def _out(x, single):
     return float(x[0]) if single else np.ascontiguousarray(x)
 
 
-def risky_faces(vertices, faces, up, overhang_angle=45.0):
+def risky_faces(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     """Mask of risky (support-needing) surface elements.
 
     Parameters
@@ -141,6 +177,9 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0):
     overhang_angle : float
         Threshold slope ``theta`` in degrees measured from the build plate;
         risky when ``n . up < -cos(theta)``.
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
+        numpy reference (same result up to round-off).
 
     Returns
     -------
@@ -148,11 +187,11 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0):
         ``m = f`` in 3D; in 2D ``m`` is the number of boundary edges, in the
         order of :func:`boundary_edges` ``(faces)``.
     """
-    _, mask, single = _compute(vertices, faces, up, overhang_angle)
+    _, mask, single = _compute(vertices, faces, up, overhang_angle, backend)
     return mask[0] if single else mask
 
 
-def risky_area(vertices, faces, up, overhang_angle=45.0):
+def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     """Total area (length in 2D) of the risky surface elements.
 
     Parameters
@@ -165,17 +204,20 @@ def risky_area(vertices, faces, up, overhang_angle=45.0):
         Printing direction (normalised internally).
     overhang_angle : float
         Threshold slope in degrees from the build plate (default 45).
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
+        numpy reference (same result up to round-off).
 
     Returns
     -------
     area : (P,) float64 or float
         Sum of the areas (lengths) of risky elements per pose.
     """
-    out, _, single = _compute(vertices, faces, up, overhang_angle)
+    out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
     return _out(out[:, 1], single)
 
 
-def overhang_energy(vertices, faces, up, overhang_angle=45.0):
+def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     """Prism overhang energy ``sum_f A_f |n_f . up| h_f`` over risky faces.
 
     Parameters
@@ -191,6 +233,9 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0):
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default
         45); risky when ``n . up < -cos(theta)``.
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
+        numpy reference (same result up to round-off).
 
     Returns
     -------
@@ -199,5 +244,5 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0):
         (``s**2`` in 2D) under uniform scaling and is invariant under
         rotations about ``up`` and translations.
     """
-    out, _, single = _compute(vertices, faces, up, overhang_angle)
+    out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
     return _out(out[:, 0], single)
