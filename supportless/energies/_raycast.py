@@ -571,6 +571,10 @@ def _grid2_batch(X, E, orient, R, tau):
 #: spans is ~1e-13 cells, so every decision is the exact test's.
 _SPAN_EPS = 1e-6
 
+#: Buffer size of the fast kernel, crossings per ray on average (the bunny
+#: has ~1.6); a pose with more is recomputed by the general kernel.
+_CROSSINGS_PER_PIXEL = 8
+
 
 @njit(cache=True, inline="always")
 def _frame_bbox3(X):
@@ -840,7 +844,7 @@ def _ray_grid3_fast(X, F, orient, R, tau, support):
     """Fast kernel over a batch; poses overflowing its buffers go to :func:`_grid3_batch`."""
     threads = numba.config.NUMBA_NUM_THREADS
     npix = R * R
-    cap = 8 * npix + 1024
+    cap = _CROSSINGS_PER_PIXEL * npix + 1024
     pix = np.empty((threads, cap), np.int32)
     zz = np.empty((threads, cap), np.float64)
     cc = np.empty((threads, cap), np.int8)
