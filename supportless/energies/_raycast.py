@@ -624,7 +624,7 @@ def _slope(px, py, qx, qy, ccw):
 
 
 @njit(cache=True)
-def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac):
+def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
     """One pose of the ray grid: same grid, crossings and sweep as :func:`_pose3`.
 
     Differences (none changes the result): candidate pixels are the centres in
@@ -658,100 +658,142 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
         cnt[q] = 0
     m = 0
     nu = 0
-    for f in range(F.shape[0]):
-        i0 = F[f, 0]
-        i1 = F[f, 1]
-        i2 = F[f, 2]
-        ay = X[i0, 1]
-        by = X[i1, 1]
-        cy = X[i2, 1]
-        sj_lo = (min(ay, min(by, cy)) - w0) * inv - 0.5
-        sj_hi = (max(ay, max(by, cy)) - w0) * inv - 0.5
-        j_lo = max(0, int(np.ceil(sj_lo - eps)))
-        j_hi = min(ny - 1, int(np.floor(sj_hi + eps)))
-        if j_hi < j_lo:
-            continue
-        ax = X[i0, 0]
-        bx = X[i1, 0]
-        cx = X[i2, 0]
-        lo_u = min(ax, min(bx, cx))
-        hi_u = max(ax, max(bx, cx))
-        i_lo = max(0, int(np.ceil((lo_u - u0) * inv - 0.5 - eps)))
-        i_hi = min(nx - 1, int(np.floor((hi_u - u0) * inv - 0.5 + eps)))
-        if i_hi < i_lo:
-            continue
-        az = X[i0, 2]
-        e1x = bx - ax
-        e1y = by - ay
-        e1z = X[i1, 2] - az
-        e2x = cx - ax
-        e2y = cy - ay
-        e2z = X[i2, 2] - az
-        nzv = e1x * e2y - e1y * e2x  # = doubled signed projected area
-        if nzv == 0.0:
-            continue
-        nxv = e1y * e2z - e1z * e2y
-        nyv = e1z * e2x - e1x * e2z
-        # 0: leaving material, 1: entering, 2: entering through a risky face
-        code = 0
-        if orient * nzv < 0.0:
-            code = 1
-            if support:
-                nlen = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
-                if orient * nzv / nlen < -tau:
-                    code = 2
-        gx = -nxv / nzv
-        gy = -nyv / nzv
-        ccw = nzv > 0.0
-        # float edge functions in cell units, inside > 0 (vertices taken
-        # counter-clockwise); a centre within `tol` of an edge gets the exact test
-        pa_u = (ax - u0) * inv - 0.5
-        pa_w = (ay - w0) * inv - 0.5
-        if ccw:
-            pb_u = (bx - u0) * inv - 0.5
-            pb_w = (by - w0) * inv - 0.5
-            pc_u = (cx - u0) * inv - 0.5
-            pc_w = (cy - w0) * inv - 0.5
-        else:
-            pc_u = (bx - u0) * inv - 0.5
-            pc_w = (by - w0) * inv - 0.5
-            pb_u = (cx - u0) * inv - 0.5
-            pb_w = (cy - w0) * inv - 0.5
-        d1u = pb_u - pa_u
-        d1w = pb_w - pa_w
-        d2u = pc_u - pb_u
-        d2w = pc_w - pb_w
-        d3u = pa_u - pc_u
-        d3w = pa_w - pc_w
-        tol1 = eps * (abs(d1u) + abs(d1w)) + 1e-9
-        tol2 = eps * (abs(d2u) + abs(d2w)) + 1e-9
-        tol3 = eps * (abs(d3u) + abs(d3w)) + 1e-9
-        for j in range(j_lo, j_hi + 1):
-            py = w0 + (j + 0.5) * cell
-            e1 = d1u * (j - pa_w) - d1w * (i_lo - pa_u)
-            e2 = d2u * (j - pb_w) - d2w * (i_lo - pb_u)
-            e3 = d3u * (j - pc_w) - d3w * (i_lo - pc_u)
-            row = j * nx
-            for i in range(i_lo, i_hi + 1):
-                # branch-free: keep the candidate when it is not surely
-                # outside, remember it when it is not surely inside either
+    two_pass = not support
+    for pss in range(2 if two_pass else 1):
+        if pss == 1:
+            # rays with two or more entering crossings (the only ones that can be
+            # inside two layers) keep their count; the others get a large
+            # negative one; `sat` counts flagged rays in [0, j) x [0, i)
+            w = nx + 1
+            for i in range(w):
+                sat[i] = 0
+            for j in range(ny):
+                acc = 0
+                sat[(j + 1) * w] = 0
+                for i in range(nx):
+                    q = j * nx + i
+                    if cnt[q] >= 2:
+                        acc += 1
+                    else:
+                        cnt[q] = -(1 << 30)
+                    sat[(j + 1) * w + i + 1] = sat[j * w + i + 1] + acc
+        for f in range(F.shape[0]):
+            i0 = F[f, 0]
+            i1 = F[f, 1]
+            i2 = F[f, 2]
+            ay = X[i0, 1]
+            by = X[i1, 1]
+            cy = X[i2, 1]
+            sj_lo = (min(ay, min(by, cy)) - w0) * inv - 0.5
+            sj_hi = (max(ay, max(by, cy)) - w0) * inv - 0.5
+            j_lo = max(0, int(np.ceil(sj_lo - eps)))
+            j_hi = min(ny - 1, int(np.floor(sj_hi + eps)))
+            if j_hi < j_lo:
+                continue
+            ax = X[i0, 0]
+            bx = X[i1, 0]
+            cx = X[i2, 0]
+            lo_u = min(ax, min(bx, cx))
+            hi_u = max(ax, max(bx, cx))
+            i_lo = max(0, int(np.ceil((lo_u - u0) * inv - 0.5 - eps)))
+            i_hi = min(nx - 1, int(np.floor((hi_u - u0) * inv - 0.5 + eps)))
+            if i_hi < i_lo:
+                continue
+            az = X[i0, 2]
+            e1x = bx - ax
+            e1y = by - ay
+            e1z = X[i1, 2] - az
+            e2x = cx - ax
+            e2y = cy - ay
+            e2z = X[i2, 2] - az
+            nzv = e1x * e2y - e1y * e2x  # = doubled signed projected area
+            if nzv == 0.0:
+                continue
+            nxv = e1y * e2z - e1z * e2y
+            nyv = e1z * e2x - e1x * e2z
+            # 0: leaving material, 1: entering, 2: entering through a risky face
+            code = 0
+            if orient * nzv < 0.0:
+                code = 1
+                if support:
+                    nlen = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)
+                    if orient * nzv / nlen < -tau:
+                        code = 2
+            if two_pass:
+                if pss == 0 and code == 0:
+                    continue
+                if pss == 1:
+                    if code != 0:
+                        continue
+                    # skip leaving faces whose bounding box holds no flagged ray
+                    w = nx + 1
+                    if (sat[(j_hi + 1) * w + i_hi + 1] - sat[j_lo * w + i_hi + 1] - sat[(j_hi + 1) * w + i_lo]
+                            + sat[j_lo * w + i_lo]) == 0:
+                        continue
+            gx = -nxv / nzv
+            gy = -nyv / nzv
+            ccw = nzv > 0.0
+            # float edge functions in cell units, inside > 0 (vertices taken
+            # counter-clockwise); a centre within `tol` of an edge gets the exact test
+            pa_u = (ax - u0) * inv - 0.5
+            pa_w = (ay - w0) * inv - 0.5
+            if ccw:
+                pb_u = (bx - u0) * inv - 0.5
+                pb_w = (by - w0) * inv - 0.5
+                pc_u = (cx - u0) * inv - 0.5
+                pc_w = (cy - w0) * inv - 0.5
+            else:
+                pc_u = (bx - u0) * inv - 0.5
+                pc_w = (by - w0) * inv - 0.5
+                pb_u = (cx - u0) * inv - 0.5
+                pb_w = (cy - w0) * inv - 0.5
+            d1u = pb_u - pa_u
+            d1w = pb_w - pa_w
+            d2u = pc_u - pb_u
+            d2w = pc_w - pb_w
+            d3u = pa_u - pc_u
+            d3w = pa_w - pc_w
+            tol1 = eps * (abs(d1u) + abs(d1w)) + 1e-9
+            tol2 = eps * (abs(d2u) + abs(d2w)) + 1e-9
+            tol3 = eps * (abs(d3u) + abs(d3w)) + 1e-9
+            # one flat, branch-free loop over the bounding box's centres (short
+            # nested loops cost a mispredicted exit per row)
+            if m + (i_hi - i_lo + 1) * (j_hi - j_lo + 1) > cap:
+                return 0.0, 0.0, False
+            r1 = d1u * (j_lo - pa_w) - d1w * (i_lo - pa_u)
+            r2 = d2u * (j_lo - pb_w) - d2w * (i_lo - pb_u)
+            r3 = d3u * (j_lo - pc_w) - d3w * (i_lo - pc_u)
+            e1 = r1
+            e2 = r2
+            e3 = r3
+            i = i_lo
+            j = j_lo
+            for _ in range((i_hi - i_lo + 1) * (j_hi - j_lo + 1)):
+                # keep the candidate when it is not surely outside, remember
+                # it when it is not surely inside either
                 sure = (e1 > tol1) * (e2 > tol2) * (e3 > tol3)
                 maybe = (e1 >= -tol1) * (e2 >= -tol2) * (e3 >= -tol3)
-                e1 -= d1w
-                e2 -= d2w
-                e3 -= d3w
-                if m == cap or nu == ucap:
-                    return 0.0, 0.0, False
-                q = row + i
+                q = j * nx + i
                 pix[m] = q
-                zz[m] = az + gx * (u0 + (i + 0.5) * cell - ax) + gy * (py - ay)
+                zz[m] = az + gx * (u0 + (i + 0.5) * cell - ax) + gy * (w0 + (j + 0.5) * cell - ay)
                 cc[m] = code
                 if maybe != sure:  # rare
+                    if nu == ucap:
+                        return 0.0, 0.0, False
                     ubuf[nu] = m
                     ufac[nu] = f
                     nu += 1
                 cnt[q] += maybe
                 m += maybe
+                wrap = i == i_hi
+                i = i_lo if wrap else i + 1
+                j = j + 1 if wrap else j
+                r1 = r1 + d1u if wrap else r1
+                r2 = r2 + d2u if wrap else r2
+                r3 = r3 + d3u if wrap else r3
+                e1 = r1 if wrap else e1 - d1w
+                e2 = r2 if wrap else e2 - d2w
+                e3 = r3 if wrap else e3 - d3w
     # exact, tie-broken test of the centres close to an edge
     for k in range(nu):
         t = ubuf[k]
@@ -826,14 +868,14 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
 
 
 @njit(cache=True, parallel=True)
-def _grid3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac):
+def _grid3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
     P = X.shape[0]
     out = np.zeros((P, 2), np.float64)
     ok = np.ones(P, np.bool_)
     for p in prange(P):
         t = numba.get_thread_id()
         a, b, good = _pose3_fast(X[p], F, orient[p], R, tau, support, pix[t], zz[t], cc[t], cnt[t], start[t],
-                                 zs[t], cs[t], ubuf[t], ufac[t])
+                                 zs[t], cs[t], ubuf[t], ufac[t], sat[t])
         out[p, 0] = a
         out[p, 1] = b
         ok[p] = good
@@ -854,7 +896,9 @@ def _ray_grid3_fast(X, F, orient, R, tau, support):
     start = np.empty((threads, npix), np.int64)
     ubuf = np.empty((threads, npix), np.int64)
     ufac = np.empty((threads, npix), np.int64)
-    out, ok = _grid3_fast(X, F, orient, R, float(tau), bool(support), pix, zz, cc, cnt, start, zs, cs, ubuf, ufac)
+    sat = np.empty((threads, (R + 1) * (R + 1)), np.int32)
+    out, ok = _grid3_fast(X, F, orient, R, float(tau), bool(support), pix, zz, cc, cnt, start, zs, cs, ubuf, ufac,
+                          sat)
     if not ok.all():
         bad = np.flatnonzero(~ok)
         out[bad] = _grid3_batch(np.ascontiguousarray(X[bad]), F, np.ascontiguousarray(orient[bad]), R, float(tau))
