@@ -29,8 +29,9 @@ from typing import Callable
 
 import numpy as np
 
-#: Folder of the shared test models (``../shared/data`` beside the repository).
-SHARED_DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data"
+#: Folder of the shared test models (``../shared/data`` beside the repository
+#: root, which is ``parents[1]`` of this file).
+SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
 def default_models() -> list[tuple[str, str | None, str]]:

@@ -137,7 +137,15 @@ def to_frame(V, up):
         Coordinates; the last one is the height along ``up``.
     """
     R = np.vstack([plane_basis(up), up[None]])  # (d, d), rows = new axes
-    return np.ascontiguousarray(V @ R.T)
+    # written out (not V @ R.T) so the fast kernel's in-place transform is bit-identical
+    d = V.shape[-1]
+    X = np.empty(V.shape)
+    for a in range(d):
+        x = V[..., 0] * R[a, 0]
+        for c in range(1, d):
+            x = x + V[..., c] * R[a, c]
+        X[..., a] = x
+    return X
 
 
 BACKENDS = ("fast", "numpy")
@@ -868,25 +876,45 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
 
 
 @njit(cache=True, parallel=True)
-def _grid3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
-    P = X.shape[0]
+def _grid3_fast(V, F, Rm, R, tau, support, xbuf, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
+    """Per pose: orientation, frame coordinates (as :func:`orientation_sign` and
+    :func:`to_frame`, bit for bit) and :func:`_pose3_fast`."""
+    P = V.shape[0]
+    n = V.shape[1]
     out = np.zeros((P, 2), np.float64)
     ok = np.ones(P, np.bool_)
     for p in prange(P):
         t = numba.get_thread_id()
-        a, b, good = _pose3_fast(X[p], F, orient[p], R, tau, support, pix[t], zz[t], cc[t], cnt[t], start[t],
-                                 zs[t], cs[t], ubuf[t], ufac[t], sat[t])
-        out[p, 0] = a
-        out[p, 1] = b
+        Y = V[p]
+        vol = 0.0
+        for f in range(F.shape[0]):
+            a = F[f, 0]
+            b = F[f, 1]
+            c = F[f, 2]
+            vol += Y[a, 0] * (Y[b, 1] * Y[c, 2] - Y[b, 2] * Y[c, 1])
+            vol += Y[a, 1] * (Y[b, 2] * Y[c, 0] - Y[b, 0] * Y[c, 2])
+            vol += Y[a, 2] * (Y[b, 0] * Y[c, 1] - Y[b, 1] * Y[c, 0])
+        orient = -1.0 if vol / 6.0 < 0.0 else 1.0
+        X = xbuf[t]
+        for i in range(n):
+            for a in range(3):
+                X[i, a] = Y[i, 0] * Rm[a, 0] + Y[i, 1] * Rm[a, 1] + Y[i, 2] * Rm[a, 2]
+        r0, r1, good = _pose3_fast(X[:n], F, orient, R, tau, support, pix[t], zz[t], cc[t], cnt[t], start[t],
+                                   zs[t], cs[t], ubuf[t], ufac[t], sat[t])
+        out[p, 0] = r0
+        out[p, 1] = r1
         ok[p] = good
     return out, ok
 
 
-def _ray_grid3_fast(X, F, orient, R, tau, support):
-    """Fast kernel over a batch; poses overflowing its buffers go to :func:`_grid3_batch`."""
+def _ray_grid3_fast(V, F, up, R, tau, support):
+    """Fast kernel over a batch of world-space poses; poses overflowing its
+    buffers go to :func:`_grid3_batch`."""
     threads = numba.config.NUMBA_NUM_THREADS
     npix = R * R
     cap = _CROSSINGS_PER_PIXEL * npix + 1024
+    Rm = np.ascontiguousarray(np.vstack([plane_basis(up), up[None]]))
+    xbuf = np.empty((threads, V.shape[1], 3), np.float64)
     pix = np.empty((threads, cap), np.int32)
     zz = np.empty((threads, cap), np.float64)
     cc = np.empty((threads, cap), np.int8)
@@ -897,11 +925,12 @@ def _ray_grid3_fast(X, F, orient, R, tau, support):
     ubuf = np.empty((threads, npix), np.int64)
     ufac = np.empty((threads, npix), np.int64)
     sat = np.empty((threads, (R + 1) * (R + 1)), np.int32)
-    out, ok = _grid3_fast(X, F, orient, R, float(tau), bool(support), pix, zz, cc, cnt, start, zs, cs, ubuf, ufac,
-                          sat)
+    out, ok = _grid3_fast(V, F, Rm, R, float(tau), bool(support), xbuf, pix, zz, cc, cnt, start, zs, cs, ubuf,
+                          ufac, sat)
     if not ok.all():
         bad = np.flatnonzero(~ok)
-        out[bad] = _grid3_batch(np.ascontiguousarray(X[bad]), F, np.ascontiguousarray(orient[bad]), R, float(tau))
+        Vb = np.ascontiguousarray(V[bad])
+        out[bad] = _grid3_batch(to_frame(Vb, up), F, np.ascontiguousarray(orientation_sign(Vb, F)), R, float(tau))
     return out
 
 
@@ -933,6 +962,8 @@ def ray_grid(V, F, up, resolution, tau, backend="fast", support=True):
     if R < 1:
         raise ValueError("resolution must be a positive integer")
     check_backend(backend)
+    if backend == "fast" and V.shape[-1] == 3:
+        return _ray_grid3_fast(V, F, up, R, tau, support)
     orient = np.ascontiguousarray(orientation_sign(V, F, backend))
     X = to_frame(V, up)
     if backend == "numpy":
@@ -940,8 +971,6 @@ def ray_grid(V, F, up, resolution, tau, backend="fast", support=True):
             return np.array([_pose3_numpy(x, F, o, R, float(tau), support) for x, o in zip(X, orient)]).reshape(-1, 2)
         E = boundary_edges(F)
         return np.array([_pose2_numpy(x, E, o, R, float(tau)) for x, o in zip(X, orient)]).reshape(-1, 2)
-    if V.shape[-1] == 3:
-        return _ray_grid3_fast(X, F, orient, R, tau, support)
     E = boundary_edges(F)
     return _grid2_batch(X, E, orient, R, float(tau))
 
