@@ -23,6 +23,17 @@ Every ray therefore crosses a closed, consistently oriented surface an
 even number of times, and a ray through a shared edge or vertex is counted
 exactly once.  In 2D the same idea reduces to half-open intervals
 ``[min(u_a, u_b), max(u_a, u_b))``.
+
+Backends
+--------
+``backend="fast"`` runs numba kernels parallel over poses; the 3D kernel
+(:func:`_pose3_fast`) tests each triangle's bounding-box centres with float
+edge functions and hands the few centres within ``_SPAN_EPS`` of an edge to
+the exact test above, so it finds exactly the crossings of the reference
+kernel :func:`_pose3` (kept as the fallback for poses overflowing the
+buffers).  ``backend="numpy"`` is a plain numpy implementation of the same
+rules (vectorised over (face, pixel) pairs, sorted with ``np.lexsort``),
+slower, for reference and tests.
 """
 
 from __future__ import annotations
@@ -166,6 +177,8 @@ def orientation_sign(V, F, backend="fast"):
         Batched vertices.
     F : (f, 3) int64
         Triangles.
+    backend : {"fast", "numpy"}
+        numba kernel or plain numpy.
 
     Returns
     -------
@@ -951,6 +964,16 @@ def ray_grid(V, F, up, resolution, tau, backend="fast", support=True):
         ``resolution`` cells.
     tau : float
         Risk threshold: a crossing face with ``n . up < -tau`` is risky.
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels, parallel over poses (3D: per-thread buffers,
+        orientation and frame computed in the kernel); ``numpy``: the plain
+        numpy reference, one pose at a time.  Both find the same crossings
+        and agree to round-off in the sums.
+    support : bool
+        When False only column 0 is wanted: the fast 3D kernel then
+        rasterises the entering (downward) faces first and the leaving ones
+        only over rays with two or more entering crossings, and column 1 is
+        not meaningful.
 
     Returns
     -------
