@@ -181,6 +181,39 @@ class Objective:
         terms = self.normalise(raw)
         return self.combine(terms), terms, raw
 
+    def bounded(self, angles: np.ndarray, bound: np.ndarray) -> np.ndarray:
+        """Objective of a batch, exact only where it can beat ``bound``.
+
+        The self-intersection term is never negative, so a pose whose
+        distortion and overhang terms alone reach its bound cannot beat it; the
+        (expensive) intersection term is computed only for the others. The
+        swarm passes each particle's best value as its bound.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) float64
+        bound : (P,) float64
+
+        Returns
+        -------
+        values : (P,) float64
+            The objective where it is below ``bound``; elsewhere a lower bound
+            of it that is at least ``bound``.
+        """
+        from .kinematics import skin
+
+        transforms = self.rig.transforms(angles)
+        V = skin(self.rig.lbs, transforms)
+        values = (self.w_arap * arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend)
+                  / self.volume + self.w_overhang * self.overhang(V) / self.overhang_scale)
+        values = np.asarray(values, np.float64)
+        todo = np.flatnonzero(values < np.asarray(bound))
+        if len(todo) and self.w_intersect != 0:
+            inter = self_intersection_volume(V[todo], self.rig.faces, self.rig.up, self.resolution,
+                                             backend=self.backend)
+            values[todo] += self.w_intersect * np.asarray(inter) / self.volume
+        return values
+
     def __call__(self, angles: np.ndarray) -> np.ndarray:
         """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""
         return self.combine(self.terms(angles))

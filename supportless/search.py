@@ -56,7 +56,8 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
                    inertia: float = 0.7298, cognitive: float = 1.49618, social: float = 1.49618,
                    initial: np.ndarray | None = None,
                    callback: Callable[[int, np.ndarray, float], bool | None] | None = None,
-                   feasible: Callable[[np.ndarray], bool] | None = None) -> SwarmResult:
+                   feasible: Callable[[np.ndarray], bool] | None = None,
+                   pass_bound: bool = False) -> SwarmResult:
     """Minimise ``f`` over a box with a particle swarm.
 
     Parameters
@@ -85,6 +86,10 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
         every particle: it is asked only about positions that would become the
         swarm's best (best first), and a rejected position counts as +inf. The
         initial particles given in ``initial`` are taken as feasible.
+    pass_bound : bool
+        Call ``f(X, bound)`` with each particle's best value so far (+inf at
+        the start): where ``f`` cannot go below the bound it may return any
+        value not below it, and skip the exact computation.
 
     Returns
     -------
@@ -102,7 +107,10 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
         initial = np.atleast_2d(np.asarray(initial, np.float64))[:particles]
         X[: len(initial)] = np.clip(initial, lower, upper)
     Vel = span * rng.uniform(-1.0, 1.0, (particles, k)) * 0.25
-    values = np.asarray(f(X), np.float64)
+    def evaluate(X, bound):
+        return np.asarray(f(X, bound) if pass_bound else f(X), np.float64)
+
+    values = evaluate(X, np.full(particles, np.inf))
     evaluations = particles
     n_initial = 0 if initial is None else len(initial)
     if feasible is not None:
@@ -119,7 +127,7 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
             r_g = rng.random((particles, k))
             Vel = inertia * Vel + cognitive * r_p * (best_X - X) + social * r_g * (g_x - X)
             X = np.clip(X + Vel, lower, upper)
-            values = np.asarray(f(X), np.float64)
+            values = evaluate(X, best_f)
             evaluations += particles
             if feasible is not None:
                 _reject_infeasible(values, X, g_f, feasible)
@@ -335,8 +343,8 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         A[:, free_mask] = X
         return A
 
-    def f(X):
-        return objective(to_angles(X))
+    def f(X, bound):
+        return objective.bounded(to_angles(X), bound)
 
     term_history = {"arap": [], "overhang": [], "intersection": []}
 
@@ -357,12 +365,12 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
             return intersecting_face_pairs(rig.pose(to_angles(x[None])[0]), rig.faces) == 0
 
     if k == 0:
-        swarm = SwarmResult(np.zeros(0), float(f(np.zeros((1, 0)))[0]), np.zeros(1), 1)
+        swarm = SwarmResult(np.zeros(0), float(objective(rig.rest_angles()[None])[0]), np.zeros(1), 1)
     else:
         swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=particles,
                                iterations=iterations, rng=np.random.default_rng(seed),
                                initial=np.zeros((1, k)), callback=on_iteration, feasible=feasible,
-                               **PSO_PRESETS[preset])
+                               pass_bound=True, **PSO_PRESETS[preset])
     angles = to_angles(swarm.x[None])[0]
     posed = place_on_plate(rig.pose(angles), rig.up)
     terms = {key: float(v) for key, v in objective.terms(angles).items()}

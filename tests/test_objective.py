@@ -100,3 +100,15 @@ def test_overhang_offset_adds_footprint_term(rig):
     V = rig.pose(A)
     expected = plain.overhang(V) + 0.1 * off.height * projected_risky_area(V, rig.faces, rig.up)
     np.testing.assert_allclose(off.overhang(V), expected, rtol=1e-12)
+
+
+def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
+    obj = sl.Objective(rig)
+    A = random_angles(rig, 40, scale=1.2, seed=7)
+    exact = obj(A)
+    bound = np.where(np.arange(40) % 2 == 0, np.inf, np.median(exact))
+    got = obj.bounded(A, bound)
+    below = exact < bound
+    np.testing.assert_allclose(got[below], exact[below], rtol=1e-12)
+    assert np.all(got[~below] >= bound[~below])
+    assert np.all(got <= exact + 1e-12)  # a lower bound everywhere

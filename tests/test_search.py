@@ -168,3 +168,20 @@ def test_swarm_feasibility_constraint_is_never_violated_by_the_result():
     assert res.x[0] <= 0.0
     assert abs(res.x[0]) < 0.05 and abs(res.x[1] - 0.3) < 0.05  # the constrained optimum (0, 0.3)
     assert 0 < len(checked) < 20 * 31  # asked only about would-be bests
+
+
+def test_swarm_with_bound_matches_plain_swarm():
+    """A bounded objective that skips work above the bound gives the same search."""
+    def bounded(X, bound):
+        cheap = np.sum((X - 0.3) ** 2, axis=1)
+        return np.where(cheap < bound, cheap + 0.1 * np.abs(X[:, 0]), cheap)
+
+    def full(X):
+        cheap = np.sum((X - 0.3) ** 2, axis=1)
+        return cheap + 0.1 * np.abs(X[:, 0])
+
+    a = particle_swarm(bounded, -np.ones(3), np.ones(3), particles=15, iterations=20,
+                       rng=np.random.default_rng(2), pass_bound=True)
+    b = particle_swarm(full, -np.ones(3), np.ones(3), particles=15, iterations=20, rng=np.random.default_rng(2))
+    np.testing.assert_array_equal(a.x, b.x)
+    np.testing.assert_array_equal(a.history, b.history)
