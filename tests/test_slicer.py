@@ -288,3 +288,47 @@ def test_accepts_mesh_paths(prusa, tmp_path):
     # identical geometry: identical support, up to slicer noise
     assert r.support_mm_before > 20.0
     assert r.support_mm_after == pytest.approx(r.support_mm_before, rel=0.02)
+
+
+# --- the command line, on the built-in demo figure -------------------------
+
+
+def _demo_meshes(tmp_path):
+    import supportless
+
+    rig = supportless.load_rig("demo:branch", cache_dir=tmp_path / "cache")
+    res = supportless.optimize(rig, particles=12, iterations=6, seed=0)
+    supportless.write_mesh(tmp_path / "rest.stl", rig.vertices, rig.faces)
+    supportless.write_mesh(tmp_path / "posed.stl", res.vertices, rig.faces)
+    return tmp_path / "rest.stl", tmp_path / "posed.stl"
+
+
+def test_cli_slice_check_on_the_demo_figure(tmp_path):
+    if find_prusa_slicer() is None:
+        pytest.skip("PrusaSlicer not installed: apt-get install prusa-slicer")
+    from click.testing import CliRunner
+
+    from supportless.cli import main
+
+    rest, posed = _demo_meshes(tmp_path)
+    out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--up", "y", "--json"])
+    assert out.exit_code == 0, out.output
+    data = json.loads(out.output)
+    assert data["before"]["support_mm"] > 0
+    assert data["after"]["support_mm"] < data["before"]["support_mm"]
+    assert data["reduction_percent"] > 0
+    text = CliRunner().invoke(main, ["slice-check", str(rest), str(posed)])
+    assert text.exit_code == 0 and "reduction" in text.output
+
+
+def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from supportless.cli import main
+
+    rest, posed = _demo_meshes(tmp_path)
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(tmp_path / "no-such-slicer"))
+    out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed)])
+    assert out.exit_code == 2
+    assert "apt-get install prusa-slicer" in out.output
+    assert "Traceback" not in out.output
