@@ -337,8 +337,14 @@ def test_page_in_chromium(rig, tmp_path):
             assert _number(done_text, "Support (column)") < rest_column
             assert "less than rest" in done_text
             # a clean picture: no software-WebGL notice, panel scrolled to the energies
+            from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+            # notifications may close by themselves meanwhile: best effort, short timeout
             for close in page.locator(".mantine-Notification-root button").all():
-                close.click()
+                try:
+                    close.click(timeout=2000)
+                except PlaywrightTimeout:  # gone already
+                    pass
             page.get_by_text("Status:").scroll_into_view_if_needed()
             page.wait_for_timeout(1000)
             ARTIFACTS.mkdir(exist_ok=True)
