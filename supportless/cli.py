@@ -109,8 +109,8 @@ def _search_options(f):
         click.option("--overhang-offset", type=click.FloatRange(0, None), default=0.0, show_default=True,
                      help="Add this fraction of the model's height per unit of supported footprint "
                           "(slicers' interface and base layers); 0 is the paper's estimate."),
-        click.option("--fix", multiple=True, help="Bone number (1-based, TGF order) to keep fixed; repeatable."),
-        click.option("--free", multiple=True, help="Bone number to free even if fixed by default; repeatable."),
+        click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
+        click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]
     for opt in reversed(opts):
         f = opt(f)
@@ -138,10 +138,15 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
             return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
                             overhang_angle=overhang_angle, w_arap=w_arap, w_overhang=w_overhang,
                             w_intersect=w_intersect, overhang_model=overhang_model,
-                            overhang_offset=overhang_offset, fix=list(fix),
-                            free=list(free), callback=callback)
+                            overhang_offset=overhang_offset, fix=_bone_list(fix),
+                            free=_bone_list(free), callback=callback)
         except ValueError as exc:  # bad --fix/--free
             raise InputError(None, str(exc)) from None
+
+
+def _bone_list(values) -> list[str]:
+    """``--fix 3 --fix 4`` and ``--fix 3,4`` both give ``["3", "4"]``."""
+    return [v for item in values for v in str(item).replace(",", " ").split()]
 
 
 def _summary_table(report: dict):
@@ -163,8 +168,11 @@ def _summary_table(report: dict):
     table.add_row("distortion (ARAP / volume)", f"{b['terms']['arap']:.4g}", f"{a['terms']['arap']:.4g}", "")
     table.add_row("self-intersection volume", f"{b['self_intersection_volume']:.4g}",
                   f"{a['self_intersection_volume']:.4g}", "")
-    table.add_row("intersecting face pairs (exact)", str(b.get("intersecting_face_pairs", "-")),
-                  str(a.get("intersecting_face_pairs", "-")), "")
+    def pairs(x):
+        return "n/a (2D)" if x is None or x < 0 else str(x)
+
+    table.add_row("intersecting face pairs (exact)", pairs(b.get("intersecting_face_pairs")),
+                  pairs(a.get("intersecting_face_pairs")), "")
     return table
 
 

@@ -185,3 +185,10 @@ def test_swarm_with_bound_matches_plain_swarm():
     b = particle_swarm(full, -np.ones(3), np.ones(3), particles=15, iterations=20, rng=np.random.default_rng(2))
     np.testing.assert_array_equal(a.x, b.x)
     np.testing.assert_array_equal(a.history, b.history)
+
+
+def test_cli_bone_lists_accept_commas_and_repeats():
+    from supportless.cli import _bone_list
+
+    assert _bone_list(("3,4", "7")) == ["3", "4", "7"]
+    assert _bone_list(("all",)) == ["all"]
