@@ -123,16 +123,17 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
 
     from .search import optimize
 
-    progress = Progress(TextColumn("[bold]searching"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                        TextColumn("{task.fields[status]}"), console=console, disable=quiet, transient=False)
+    progress = Progress(TextColumn("[bold]search"), BarColumn(bar_width=16), MofNCompleteColumn(),
+                        TimeElapsedColumn(), TextColumn("{task.fields[status]}"), console=console, disable=quiet,
+                        transient=False)
     with progress:
         task = progress.add_task("search", total=iterations, status="")
 
         def callback(it, info):
             t = info["terms"]
-            progress.update(task, completed=it, status=f"best {info['value']:.4f}  (arap {t['arap']:.4f}, "
-                                                       f"overhang {t['overhang']:.4f}, intersect "
-                                                       f"{t['intersection']:.4f})")
+            progress.update(task, completed=it, status=f"best {info['value']:.4f} = arap {t['arap']:.3f} "
+                                                       f"· overhang {t['overhang']:.3f} "
+                                                       f"· intersect {t['intersection']:.3f}")
 
         try:
             return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
@@ -316,7 +317,9 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     out = Path(out_dir)
     t0 = time.perf_counter()
     rig = load_rig(f"demo:{figure}", up="y")
-    console.print(f"prepared {rig!r} in {time.perf_counter() - t0:.1f} s")
+    console.print(f"{figure}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
+                  f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones; "
+                  f"rig ready in {time.perf_counter() - t0:.1f} s")
     rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"
     write_mesh(rest_mesh, rig.vertices, rig.faces)
     write_tgf(out / f"{figure}.tgf", rig.joints, rig.bones)
@@ -327,13 +330,24 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
                            title=f"{figure}: rest pose")
     result = _run_search(rig, console, particles, iterations, seed, 30.0, 45.0, None, None, None, "prism", (), (),
                          quiet)
+    from .slicer import find_prusa_slicer
+
+    slice_report = None
+    if rig.dim == 3 and find_prusa_slicer():
+        slice_report = _slice(rig, result.vertices, console)
     console.print(_summary_table(result.report))
+    if slice_report:
+        console.print(f"PrusaSlicer support filament at 60 mm tall: {slice_report['before']['support_mm']:.0f} mm "
+                      f"-> {slice_report['after']['support_mm']:.0f} mm "
+                      f"({slice_report['reduction_percent']:.1f} % less)")
+    elif rig.dim == 3:
+        console.print("PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)")
     console.print(f"search took {result.report['runtime_seconds']:.1f} s")
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
     posed_ext = "stl" if rig.dim == 3 else "obj"
     _write_outputs(rig, result, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
-                   out / f"{figure}-report.json", out, console)
+                   out / f"{figure}-report.json", out, console, slice_report)
 
 
 def _risky_for_picture(rig, V, risky_faces):
