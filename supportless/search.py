@@ -284,6 +284,7 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
              w_intersect: float | None = None, overhang_model: str = "prism", overhang_offset: float = 0.0,
              fix=None, free=None,
              preset: str = "standard", objective: Objective | None = None, exact_intersections: bool = True,
+             start: np.ndarray | None = None,
              callback: Callable[[int, dict], bool | None] | None = None) -> PoseResult:
     """Find a pose of ``rig`` that needs less support, with a particle swarm.
 
@@ -315,6 +316,11 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         best. The ray-cast intersection energy steers the search away from
         overlaps; this makes sure thin ones it cannot see never reach the
         output.
+    start : (m, 3) float64, optional
+        A pose to start from (radians), e.g. one edited by hand: fixed bones
+        keep its angles, and it is one of the initial particles (with the
+        free bones' rest rotations as another), so the result is never worse
+        than the start pose.
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
         (normalised terms of the best pose) and ``angles``; return ``False`` to
@@ -338,8 +344,12 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
     k = int(free_mask.sum())
     limit = np.radians(max_angle)
 
+    base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
+    if base.shape != (rig.bone_count, 3):
+        raise ValueError(f"start pose has {len(base)} bones, the rig {rig.bone_count}")
+
     def to_angles(X):
-        A = np.zeros((len(X), rig.bone_count, 3))
+        A = np.repeat(base[None], len(X), axis=0)
         A[:, free_mask] = X
         return A
 
@@ -364,12 +374,13 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         def feasible(x):
             return intersecting_face_pairs(rig.pose(to_angles(x[None])[0]), rig.faces) == 0
 
+    initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), base[free_mask]])
     if k == 0:
-        swarm = SwarmResult(np.zeros(0), float(objective(rig.rest_angles()[None])[0]), np.zeros(1), 1)
+        swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
     else:
         swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=particles,
                                iterations=iterations, rng=np.random.default_rng(seed),
-                               initial=np.zeros((1, k)), callback=on_iteration, feasible=feasible,
+                               initial=initial, callback=on_iteration, feasible=feasible,
                                pass_bound=True, **PSO_PRESETS[preset])
     angles = to_angles(swarm.x[None])[0]
     posed = place_on_plate(rig.pose(angles), rig.up)

@@ -192,3 +192,17 @@ def test_cli_bone_lists_accept_commas_and_repeats():
 
     assert _bone_list(("3,4", "7")) == ["3", "4", "7"]
     assert _bone_list(("all",)) == ["all"]
+
+
+def test_optimize_from_a_start_pose_is_never_worse_than_it(branch_rig):
+    rig = branch_rig
+    obj = sl.Objective(rig)
+    fixed = resolve_fixed_bones(rig)
+    start = np.zeros((rig.bone_count, 3))
+    free_bone = int(np.flatnonzero(~fixed)[0])
+    start[free_bone] = np.radians([20.0, -10.0, 25.0])
+    res = sl.optimize(rig, particles=10, iterations=4, seed=1, start=start, objective=obj)
+    assert res.value <= float(obj(start)) + 1e-12
+    assert res.value <= float(obj(rig.rest_angles())) + 1e-12
+    with pytest.raises(ValueError):
+        sl.optimize(rig, particles=4, iterations=1, start=np.zeros((rig.bone_count + 1, 3)))

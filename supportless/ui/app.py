@@ -469,6 +469,7 @@ class App:
         self._opt_cancel.clear()
         with self._lock:
             self.history.record(self.angles)
+            start = np.array(self.angles, np.float64)  # the search starts from the pose on screen
             self.opt_progress = {"iteration": 0, "iterations": settings["iterations"], "value": None,
                                  "running": True, "cancelled": False}
         total = settings["iterations"]
@@ -489,7 +490,8 @@ class App:
             try:
                 result = optimize(self.rig, particles=settings["particles"], iterations=total,
                                   seed=settings["seed"], max_angle=settings["max_angle"], fix=settings["fix"],
-                                  free=settings["free"], objective=objective, callback=callback)
+                                  free=settings["free"], objective=objective, callback=callback,
+                                  start=start)
             except Exception as exc:  # noqa: BLE001 - shown in the page, the server keeps running
                 logger.exception("pose search failed")
                 self._error(f"the search failed: {exc}")
