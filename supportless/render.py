@@ -31,7 +31,7 @@ __all__ = [
 _BASE_COLOR = np.array([0.80, 0.82, 0.86])
 _RISKY_COLOR = np.array([0.90, 0.12, 0.10])
 _FLAT_COLOR = np.array([0.72, 0.80, 0.92])
-_DEFAULT_CAMERA = {"azimuth": 25.0, "elevation": 15.0}
+_DEFAULT_CAMERA = {"azimuth": 25.0, "elevation": 12.0}
 _DPI = 100
 
 
@@ -143,7 +143,7 @@ def _nice_step(extent):
     return 10.0 * p
 
 
-def _screen_limits(bounds, up, camera, plate_pad, aspect):
+def _screen_limits(bounds, up, camera, aspect):
     """Screen rectangle (xmin, xmax, ymin, ymax) framing ``bounds``."""
     lo, hi = np.asarray(bounds, dtype=np.float64)
     dim = len(lo)
@@ -151,16 +151,13 @@ def _screen_limits(bounds, up, camera, plate_pad, aspect):
     corners = _box_corners(bounds)
     if dim == 3:
         # include the plate, which extends beyond the footprint
-        center = corners.mean(axis=0)
         h0 = (corners @ u).min()
-        r = plate_pad * 0.5 * np.linalg.norm(hi - lo)
-        ring = [center - u * (center @ u - h0) + r * (math.cos(t) * e1 + math.sin(t) * e2)
-                for t in np.linspace(0, 2 * math.pi, 16, endpoint=False)]
-        corners = np.vstack([corners, ring])
+        origin, lim, _ = _plate_rect(bounds, u, e1, e2, h0)
+        corners = np.vstack([corners, _plate_corners(origin, lim, e1, e2)])
     xs, ys = corners @ right, corners @ sup
     x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
     w, h = max(x1 - x0, 1e-12), max(y1 - y0, 1e-12)
-    pad = 0.04 * max(w, h)
+    pad = 0.02 * max(w, h)
     w, h = w + 2 * pad, h + 2 * pad
     cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
     if w / h < aspect:
@@ -194,29 +191,53 @@ def _face_base_colors(n_faces, face_colors, risky, default):
     return base
 
 
-def _draw_plate(ax, V, u, e1, e2, right, sup, bounds, plate_pad):
-    lo, hi = np.asarray(bounds, dtype=np.float64)
-    center = 0.5 * (lo + hi)
+def _plate_rect(bounds, u, e1, e2, h0, margin=0.12):
+    """Plate rectangle around the footprint of ``bounds``.
+
+    Returns
+    -------
+    origin : numpy.ndarray, shape (3,), dtype float64
+        A point on the plate (height ``h0`` along ``u``).
+    lim : numpy.ndarray, shape (2, 2), dtype float64
+        ``[[a0, a1], [b0, b1]]`` coordinate ranges along ``e1`` and ``e2``,
+        snapped to multiples of the grid step.
+    step : float
+        Grid spacing.
+    """
+    corners = _box_corners(bounds)
+    c1, c2 = corners @ e1, corners @ e2
+    ext = max(c1.max() - c1.min(), c2.max() - c2.min(), 1e-12)
+    step = _nice_step(ext * (1 + 2 * margin))
+    m = margin * ext
+    lim = np.array([[c1.min() - m, c1.max() + m], [c2.min() - m, c2.max() + m]])
+    lim[:, 0] = np.floor(lim[:, 0] / step) * step
+    lim[:, 1] = np.ceil(lim[:, 1] / step) * step
+    origin = u * h0
+    return origin, lim, step
+
+
+def _plate_corners(origin, lim, e1, e2):
+    return np.array([origin + a * e1 + b * e2
+                     for a, b in ((lim[0, 0], lim[1, 0]), (lim[0, 1], lim[1, 0]),
+                                  (lim[0, 1], lim[1, 1]), (lim[0, 0], lim[1, 1]))])
+
+
+def _draw_plate(ax, V, u, e1, e2, right, sup, bounds):
     h0 = float((V @ u).min())
-    origin = center - u * (center @ u - h0)
-    r = plate_pad * 0.5 * np.linalg.norm(hi - lo)
-    step = _nice_step(2 * r)
-    n = int(math.ceil(r / step))
-    half = n * step
-    # fill
-    quad = np.array([origin + s1 * half * e1 + s2 * half * e2
-                     for s1, s2 in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    origin, lim, step = _plate_rect(bounds, u, e1, e2, h0)
+    quad = _plate_corners(origin, lim, e1, e2)
     ax.add_collection(PolyCollection([np.c_[quad @ right, quad @ sup]],
                                      facecolors=[(0.93, 0.93, 0.90)],
                                      edgecolors=[(0.6, 0.6, 0.6)],
                                      linewidths=0.8, zorder=0))
     segs = []
-    for k in range(-n, n + 1):
-        for a, b in ((e1, e2), (e2, e1)):
-            p0 = origin + k * step * a - half * b
-            p1 = origin + k * step * a + half * b
-            segs.append([[p0 @ right, p0 @ sup], [p1 @ right, p1 @ sup]])
-    ax.add_collection(LineCollection(segs, colors=[(0.78, 0.78, 0.76)],
+    for a in np.arange(lim[0, 0], lim[0, 1] + 0.5 * step, step):
+        p0, p1 = origin + a * e1 + lim[1, 0] * e2, origin + a * e1 + lim[1, 1] * e2
+        segs.append([[p0 @ right, p0 @ sup], [p1 @ right, p1 @ sup]])
+    for b in np.arange(lim[1, 0], lim[1, 1] + 0.5 * step, step):
+        p0, p1 = origin + lim[0, 0] * e1 + b * e2, origin + lim[0, 1] * e1 + b * e2
+        segs.append([[p0 @ right, p0 @ sup], [p1 @ right, p1 @ sup]])
+    ax.add_collection(LineCollection(segs, colors=[(0.80, 0.80, 0.78)],
                                      linewidths=0.5, zorder=0.5))
 
 
@@ -234,7 +255,7 @@ def _draw_skeleton(ax, joints, bones, right, sup):
 
 
 def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
-               title, camera, bounds, aspect, plate_pad=1.15):
+               title, camera, bounds, aspect):
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     if V.ndim != 2 or V.shape[1] not in (2, 3):
@@ -246,7 +267,7 @@ def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
         pts = [V] if joints is None else [V, np.asarray(joints, dtype=np.float64)]
         bounds = view_bounds(*pts)
     right, sup, toward, u, e1, e2 = _view_frame(up, camera, dim)
-    x0, x1, y0, y1 = _screen_limits(bounds, up, camera, plate_pad, aspect)
+    x0, x1, y0, y1 = _screen_limits(bounds, up, camera, aspect)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
@@ -269,7 +290,7 @@ def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
         ax.plot([x0, x1], [h0, h0], color=(0.55, 0.55, 0.55), lw=1.2, zorder=1)
         ax.fill_between([x0, x1], [h0, h0], [y0, y0], color=(0.93, 0.93, 0.90), zorder=0)
     else:
-        _draw_plate(ax, V, u, e1, e2, right, sup, bounds, plate_pad)
+        _draw_plate(ax, V, u, e1, e2, right, sup, bounds)
         N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         ln = np.linalg.norm(N, axis=1)
         N = N / np.where(ln > 0, ln, 1.0)[:, None]
@@ -278,7 +299,7 @@ def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
         facing = N @ toward
         lam = N @ light
         # two-sided shading; back faces are drawn first and darker
-        shade = np.where(facing >= 0, 0.32 + 0.68 * np.clip(lam, 0, 1),
+        shade = np.where(facing >= 0, 0.42 + 0.58 * np.clip(lam, 0, 1),
                          0.22 + 0.35 * np.clip(-lam, 0, 1))
         base = _face_base_colors(len(F), face_colors, risky, _BASE_COLOR)
         rgb = np.clip(base * shade[:, None], 0, 1)
@@ -347,7 +368,7 @@ def render_mesh(path, vertices, faces, up, joints=None, bones=None,
         Title drawn above the picture.
     camera : dict or tuple, optional
         ``{"azimuth": deg, "elevation": deg}`` or ``(azimuth, elevation)``;
-        default ``(25, 15)``.  Azimuth 0 views along ``-Z`` for ``up = +Y``.
+        default ``(25, 12)``.  Azimuth 0 views along ``-Z`` for ``up = +Y``.
     size : tuple of int
         ``(width, height)`` of the PNG in pixels.
     bounds : numpy.ndarray, shape (2, d), dtype float64, optional
