@@ -101,6 +101,9 @@ def _search_options(f):
                      help="Bound of every free Euler angle, degrees."),
         click.option("--overhang-angle", default=45.0, show_default=True, type=click.FloatRange(0, 90),
                      help="Overhang threshold, degrees from the build plate."),
+        click.option("--overhang-margin", default=10.0, show_default=True, type=click.FloatRange(0, 45),
+                     help="The search treats faces up to threshold + margin as needing support, so none "
+                          "are left just past the threshold, where slicers still support them."),
         click.option("--w-arap", type=float, default=None, help="Weight of the distortion term."),
         click.option("--w-overhang", type=float, default=None, help="Weight of the support term."),
         click.option("--w-intersect", type=float, default=None, help="Weight of the self-intersection term."),
@@ -118,7 +121,7 @@ def _search_options(f):
 
 
 def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap, w_overhang,
-                w_intersect, overhang_model, fix, free, quiet=False, overhang_offset=0.0):
+                w_intersect, overhang_model, fix, free, quiet=False, overhang_offset=0.0, overhang_margin=10.0):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .search import optimize
@@ -137,8 +140,8 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
 
         try:
             return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
-                            overhang_angle=overhang_angle, w_arap=w_arap, w_overhang=w_overhang,
-                            w_intersect=w_intersect, overhang_model=overhang_model,
+                            overhang_angle=overhang_angle, overhang_margin=overhang_margin, w_arap=w_arap,
+                            w_overhang=w_overhang, w_intersect=w_intersect, overhang_model=overhang_model,
                             overhang_offset=overhang_offset, fix=_bone_list(fix),
                             free=_bone_list(free), callback=callback)
         except ValueError as exc:  # bad --fix/--free
@@ -216,8 +219,8 @@ def _write_outputs(rig, result, output, pose, report_path, pictures, console, sl
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles, iterations, seed, max_angle,
-             overhang_angle, w_arap, w_overhang, w_intersect, overhang_model, overhang_offset, fix, free, output,
-             report_path, pose, pictures, slice_check_flag, quiet):
+             overhang_angle, overhang_margin, w_arap, w_overhang, w_intersect, overhang_model, overhang_offset, fix,
+             free, output, report_path, pose, pictures, slice_check_flag, quiet):
     """Search a pose of MODEL that needs less support, and write it."""
     from .io import MESH_FORMATS
 
@@ -227,7 +230,8 @@ def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles,
     console = _console()
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
     result = _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap,
-                         w_overhang, w_intersect, overhang_model, fix, free, quiet, overhang_offset)
+                         w_overhang, w_intersect, overhang_model, fix, free, quiet, overhang_offset,
+                         overhang_margin)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
     slice_report = None

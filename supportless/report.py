@@ -41,7 +41,7 @@ def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
     return int(len(IF))
 
 
-def pose_measures(objective, angles: np.ndarray, exact: bool = True) -> dict:
+def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None) -> dict:
     """Everything a report says about one pose.
 
     Parameters
@@ -50,6 +50,8 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True) -> dict:
     angles : (m, 3) float64
     exact : bool
         Also count intersecting face pairs exactly (CGAL; slower).
+    overhang_angle : float, optional
+        Threshold of the support measures (default: the objective's).
 
     Returns
     -------
@@ -61,14 +63,15 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True) -> dict:
     rig = objective.rig
     V = rig.pose(angles)
     value, terms, raw = objective.evaluate(angles)
+    angle = objective.overhang_angle if overhang_angle is None else overhang_angle
     out = {
         "objective": float(value),
         "terms": {k: float(v) for k, v in terms.items()},
         "arap": float(raw["arap"]),
-        "overhang_prism": float(overhang_energy(V, rig.faces, rig.up, objective.overhang_angle)),
-        "support_column": float(support_volume(V, rig.faces, rig.up, objective.overhang_angle,
-                                               objective.resolution)),
-        "risky_area": float(risky_area(V, rig.faces, rig.up, objective.overhang_angle)),
+        "overhang_angle": float(angle),
+        "overhang_prism": float(overhang_energy(V, rig.faces, rig.up, angle)),
+        "support_column": float(support_volume(V, rig.faces, rig.up, angle, objective.resolution)),
+        "risky_area": float(risky_area(V, rig.faces, rig.up, angle)),
         "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
     }
     if exact:
@@ -81,7 +84,7 @@ def reduction(before: float, after: float) -> float | None:
     return None if before <= 0 else 100.0 * (1.0 - after / before)
 
 
-def build_report(rig, objective, result, settings: dict, runtime: float) -> dict:
+def build_report(rig, objective, result, settings: dict, runtime: float, overhang_angle: float | None = None) -> dict:
     """The JSON report of a pose search.
 
     Parameters
@@ -93,13 +96,15 @@ def build_report(rig, objective, result, settings: dict, runtime: float) -> dict
         The search settings, stored as given.
     runtime : float
         Seconds.
+    overhang_angle : float, optional
+        Threshold of the reported support measures (default: the objective's).
 
     Returns
     -------
     report : dict
     """
-    before = pose_measures(objective, rig.rest_angles())
-    after = pose_measures(objective, result.angles)
+    before = pose_measures(objective, rig.rest_angles(), overhang_angle=overhang_angle)
+    after = pose_measures(objective, result.angles, overhang_angle=overhang_angle)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
     return {

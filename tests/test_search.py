@@ -120,7 +120,9 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     a = sl.optimize(rig, particles=12, iterations=6, seed=3)
     b = sl.optimize(rig, particles=12, iterations=6, seed=3)
     np.testing.assert_array_equal(a.angles, b.angles)
-    obj = sl.Objective(rig)
+    from supportless.search import OVERHANG_MARGIN
+
+    obj = sl.Objective(rig, overhang_angle=45.0 + OVERHANG_MARGIN)  # what the search minimises
     rest = float(obj(rig.rest_angles()))
     assert a.value <= rest + 1e-12
     assert np.isclose(float(obj(a.angles)), a.value)
@@ -206,3 +208,15 @@ def test_optimize_from_a_start_pose_is_never_worse_than_it(branch_rig):
     assert res.value <= float(obj(rig.rest_angles())) + 1e-12
     with pytest.raises(ValueError):
         sl.optimize(rig, particles=4, iterations=1, start=np.zeros((rig.bone_count + 1, 3)))
+
+
+def test_search_margin_reports_at_the_printers_threshold(branch_rig):
+    rig = branch_rig
+    res = sl.optimize(rig, particles=8, iterations=3, seed=0, overhang_angle=45.0, overhang_margin=10.0)
+    rep = res.report
+    assert rep["before"]["overhang_angle"] == 45.0
+    assert np.isclose(rep["before"]["overhang_prism"], sl.overhang_energy(rig.vertices, rig.faces, rig.up, 45.0))
+    assert rep["settings"]["overhang_angle"] == 55.0  # what the search used
+    assert rep["settings"]["report_overhang_angle"] == 45.0
+    none = sl.optimize(rig, particles=8, iterations=3, seed=0, overhang_margin=0.0)
+    assert none.report["settings"]["overhang_angle"] == 45.0

@@ -36,7 +36,7 @@ from ..energies.support import support_volume
 from ..errors import InputError, SupportlessError
 from ..objective import W_ARAP, W_INTERSECT, W_OVERHANG, Objective
 from ..report import reduction
-from ..search import place_on_plate, resolve_fixed_bones
+from ..search import OVERHANG_MARGIN, place_on_plate, resolve_fixed_bones
 from .history import PoseHistory
 
 logger = logging.getLogger("supportless.ui")
@@ -464,8 +464,9 @@ class App:
         if fixed.all():
             self._error("every bone is fixed: free some bones (e.g. Free bones: all)")
             return False
+        # the search looks past the threshold by a margin (see supportless.search.OVERHANG_MARGIN)
         objective = self._make_objective(settings["w_arap"], settings["w_overhang"], settings["w_intersect"],
-                                         settings["overhang_angle"])
+                                         min(float(settings["overhang_angle"]) + OVERHANG_MARGIN, 89.0))
         self._opt_cancel.clear()
         with self._lock:
             self.history.record(self.angles)
