@@ -244,7 +244,7 @@ def _branch():
 
 def _woody2d(samples_per_bone=5, max_area=1.5):
     """Planar stick figure triangulated with vertices on every bone."""
-    import igl.triangle
+    from .tetmesh import triangulate_planar
     import manifold3d
 
     joints = np.array([
@@ -329,10 +329,7 @@ def _woody2d(samples_per_bone=5, max_area=1.5):
     Ein = np.vstack([boundary_edges, np.asarray(bone_edges, dtype=np.int64)])
     # p: PSLG, q: min angle, a: max area, Y: no Steiner points on segments,
     # Q: quiet
-    V, F, _, _, _ = igl.triangle.triangulate(
-        Vin, Ein, flags=f"pq28a{max_area}YQ")
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
+    V, F = triangulate_planar(Vin, Ein, max_area=max_area, min_angle=28)
     # make every triangle counter-clockwise
     e1 = V[F[:, 1]] - V[F[:, 0]]
     e2 = V[F[:, 2]] - V[F[:, 0]]

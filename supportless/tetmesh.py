@@ -1,8 +1,9 @@
 """Volume meshes for the rig: tetrahedra in 3D, a refined triangulation in 2D.
 
 Every call to TetGen (AGPL-licensed, reached through ``igl.copyleft.tetgen``)
-lives in this module and nowhere else, so the licence question and a possible
-replacement stay in one place.
+and to Shewchuk's Triangle (free for non-commercial use only, reached through
+``igl.triangle``) lives in this module and nowhere else, so the licence
+questions and a possible replacement stay in one place.
 """
 
 from __future__ import annotations
@@ -177,3 +178,30 @@ def bone_samples(joints: np.ndarray, bones: np.ndarray, samples_per_bone: int) -
     a, b = joints[bones[:, 0]], joints[bones[:, 1]]
     inner = (a[:, None, :] * (1 - t)[None, :, None] + b[:, None, :] * t[None, :, None]).reshape(-1, joints.shape[1])
     return np.concatenate([joints, inner])
+
+
+def triangulate_planar(points: np.ndarray, segments: np.ndarray, max_area: float,
+                       min_angle: float = 28.0) -> tuple[np.ndarray, np.ndarray]:
+    """Quality triangulation of a planar straight-line graph (Triangle).
+
+    Parameters
+    ----------
+    points : (k, 2) float64
+        Outline and interior points; all are kept as vertices.
+    segments : (s, 2) int64
+        Edges that must appear (the outline, the bones), not split.
+    max_area : float
+        Largest triangle area.
+    min_angle : float
+        Smallest angle in degrees.
+
+    Returns
+    -------
+    vertices : (n, 2) float64
+    faces : (f, 3) int64
+    """
+    import igl.triangle
+
+    V, F, _, _, _ = igl.triangle.triangulate(np.asarray(points, np.float64), np.asarray(segments, np.int64),
+                                             flags=f"pq{min_angle:g}a{max_area:g}YQ")
+    return np.asarray(V, np.float64), np.asarray(F, np.int64)
