@@ -130,6 +130,7 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
     Returns the measured times: ``{"rows": [(stage, {backend: seconds}, per_pose_count, note)], ...}``.
     """
     from .objective import Objective
+    from .search import OVERHANG_MARGIN
     from .rig import load_rig
 
     backends = ["fast", "numpy"] if backend == "both" else [backend]
@@ -147,7 +148,8 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
     times: dict[str, dict] = {}
     search_info = {}
     for b in backends:
-        obj = Objective(rig, backend=b)
+        # the objective the search minimises by default (threshold + search margin)
+        obj = Objective(rig, backend=b, overhang_angle=45.0 + OVERHANG_MARGIN)
         t = time.perf_counter()
         obj.arap_data, obj.rest_overhang  # noqa: B018 -- precompute (once per rig)
         obj(swarm[:2])  # warm-up: numba compilation / caches
