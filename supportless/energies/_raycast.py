@@ -320,6 +320,21 @@ def _grow(pix, zz, cc):
     return p2, z2, c2
 
 
+
+@njit(cache=True, inline="always")
+def _sort_segment(zs, cs, s0, s1):
+    """Insertion sort of ``zs[s0:s1]`` (the crossings of one ray, few) with ``cs`` alongside."""
+    for i in range(s0 + 1, s1):
+        zk = zs[i]
+        ck = cs[i]
+        j = i - 1
+        while j >= s0 and zs[j] > zk:
+            zs[j + 1] = zs[j]
+            cs[j + 1] = cs[j]
+            j -= 1
+        zs[j + 1] = zk
+        cs[j + 1] = ck
+
 @njit(cache=True)
 def _sweep(pix, zz, cc, m, npix, zplate, tau):
     """Sort crossings per pixel and sweep upwards.
@@ -347,17 +362,7 @@ def _sweep(pix, zz, cc, m, npix, zplate, tau):
         s1 = start[q + 1]
         if s1 == s0:
             continue
-        # insertion sort of the (small) segment by height
-        for i in range(s0 + 1, s1):
-            zk = zs[i]
-            ck = cs[i]
-            j = i - 1
-            while j >= s0 and zs[j] > zk:
-                zs[j + 1] = zs[j]
-                cs[j + 1] = cs[j]
-                j -= 1
-            zs[j + 1] = zk
-            cs[j + 1] = ck
+        _sort_segment(zs, cs, s0, s1)
         count = 0
         zprev = zplate
         for k in range(s0, s1):
@@ -858,16 +863,7 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
             continue
         s1 = start[q]
         s0 = s1 - n
-        for i in range(s0 + 1, s1):
-            zk = zs[i]
-            ck = cs[i]
-            j = i - 1
-            while j >= s0 and zs[j] > zk:
-                zs[j + 1] = zs[j]
-                cs[j + 1] = cs[j]
-                j -= 1
-            zs[j + 1] = zk
-            cs[j + 1] = ck
+        _sort_segment(zs, cs, s0, s1)
         count = 0
         zprev = zplate
         for k in range(s0, s1):
