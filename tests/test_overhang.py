@@ -133,8 +133,8 @@ def test_threshold_angle_parameter():
     )
 
 
-def test_bunny_random_directions_brute_force():
-    m = trimesh.load("/work/shared/data/bunny.obj", process=False)
+def test_bunny_random_directions_brute_force(shared_data):
+    m = trimesh.load(shared_data / "bunny.obj", process=False)
     V, F = np.asarray(m.vertices), np.asarray(m.faces)
     rng = np.random.default_rng(3)
     for _ in range(3):

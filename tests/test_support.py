@@ -164,8 +164,8 @@ def test_sphere_analytic():
     assert overhang_energy(s.vertices, s.faces, UP) == pytest.approx(ref, rel=0.03)
 
 
-def test_bunny_matches_brute_force():
-    m = trimesh.load("/work/shared/data/bunny.obj", process=False)
+def test_bunny_matches_brute_force(shared_data):
+    m = trimesh.load(shared_data / "bunny.obj", process=False)
     R = trimesh.transformations.rotation_matrix(2.0, [1.0, 0.3, 0.0])
     m.apply_transform(R)
     got = support_volume(m.vertices, m.faces, UP, resolution=64)
