@@ -237,13 +237,22 @@ def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles,
     slice_report = None
     if slice_check_flag:
         slice_report = _slice(rig, result.vertices, console)
+    _print_results(console, rig, result, slice_report)
+    _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report)
+
+
+def _print_results(console, rig, result, slice_report, say_if_no_slicer=False):
+    """The before/after table, the slicer's figures when there are some, and the search time."""
     console.print(_summary_table(result.report))
     if slice_report:
-        console.print(f"PrusaSlicer support filament: {slice_report['before']['support_mm']:.0f} mm -> "
-                      f"{slice_report['after']['support_mm']:.0f} mm "
-                      f"({slice_report['reduction_percent']:.1f} % less)")
+        red = slice_report["reduction_percent"]
+        change = "no support before" if red is None else f"{red:.1f} % less"
+        console.print(f"PrusaSlicer support filament at {slice_report['height_mm']:g} mm tall: "
+                      f"{slice_report['before']['support_mm']:.0f} mm -> "
+                      f"{slice_report['after']['support_mm']:.0f} mm ({change})")
+    elif say_if_no_slicer and rig.dim == 3:
+        console.print("PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)")
     console.print(f"search took {result.report['runtime_seconds']:.1f} s")
-    _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report)
 
 
 def _slice(rig, posed_vertices, console, height_mm=60.0):
@@ -339,14 +348,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     slice_report = None
     if rig.dim == 3 and find_prusa_slicer():
         slice_report = _slice(rig, result.vertices, console)
-    console.print(_summary_table(result.report))
-    if slice_report:
-        console.print(f"PrusaSlicer support filament at 60 mm tall: {slice_report['before']['support_mm']:.0f} mm "
-                      f"-> {slice_report['after']['support_mm']:.0f} mm "
-                      f"({slice_report['reduction_percent']:.1f} % less)")
-    elif rig.dim == 3:
-        console.print("PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)")
-    console.print(f"search took {result.report['runtime_seconds']:.1f} s")
+    _print_results(console, rig, result, slice_report, say_if_no_slicer=True)
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
     posed_ext = "stl" if rig.dim == 3 else "obj"
