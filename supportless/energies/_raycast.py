@@ -308,6 +308,22 @@ def _inside(ox, oy, dx, dy, flip, tie, px, py):
     return e * flip > 0.0
 
 
+@njit(cache=True, inline="always")
+def _clip_row(ox, oy, dx, dy, flip, tie, py, xl, xr, empty):
+    """Narrow the span ``[xl, xr]`` of a pixel row to the inner side of one edge.
+
+    A horizontal edge (``dy == 0``) does not depend on x: one exact test
+    decides the whole row (``empty``). Returns ``(xl, xr, empty)``.
+    """
+    if dy == 0.0:
+        empty = empty or not _inside(ox, oy, dx, dy, flip, tie, xl, py)
+    elif flip * dy > 0.0:
+        xr = min(xr, ox + dx * (py - oy) / dy)
+    else:
+        xl = max(xl, ox + dx * (py - oy) / dy)
+    return xl, xr, empty
+
+
 @njit(cache=True)
 def _grow(pix, zz, cc):
     n = pix.shape[0] * 2
@@ -467,27 +483,9 @@ def _pose3(X, F, orient, R, tau):
             # either end get the exact (tie-broken) test, pixels more than a
             # cell inside are accepted directly.  Edges with dy == 0 do not
             # depend on px: one exact test decides the whole row.
-            xl = lo_u
-            xr = hi_u
-            empty = False
-            if d1y == 0.0:
-                empty = empty or not _inside(o1x, o1y, d1x, d1y, f1, t1, lo_u, py)
-            elif f1 * d1y > 0.0:
-                xr = min(xr, o1x + d1x * (py - o1y) / d1y)
-            else:
-                xl = max(xl, o1x + d1x * (py - o1y) / d1y)
-            if d2y == 0.0:
-                empty = empty or not _inside(o2x, o2y, d2x, d2y, f2, t2, lo_u, py)
-            elif f2 * d2y > 0.0:
-                xr = min(xr, o2x + d2x * (py - o2y) / d2y)
-            else:
-                xl = max(xl, o2x + d2x * (py - o2y) / d2y)
-            if d3y == 0.0:
-                empty = empty or not _inside(o3x, o3y, d3x, d3y, f3, t3, lo_u, py)
-            elif f3 * d3y > 0.0:
-                xr = min(xr, o3x + d3x * (py - o3y) / d3y)
-            else:
-                xl = max(xl, o3x + d3x * (py - o3y) / d3y)
+            xl, xr, empty = _clip_row(o1x, o1y, d1x, d1y, f1, t1, py, lo_u, hi_u, False)
+            xl, xr, empty = _clip_row(o2x, o2y, d2x, d2y, f2, t2, py, xl, xr, empty)
+            xl, xr, empty = _clip_row(o3x, o3y, d3x, d3y, f3, t3, py, xl, xr, empty)
             if empty:
                 continue
             ia = int(np.ceil((xl - u0) / cell - 0.5))
