@@ -11,7 +11,7 @@ compare the support filament with
 all scaled to the same 60 mm model. It fits, over all samples, filament ≈ a·x
 and filament ≈ a·x + b·footprint for x = prism or column, and prints R² of
 each, and the footprint weight b/a as a height (mm) and as a fraction of the
-model height: the ``--overhang-offset`` that makes the estimate slicer-like.
+model height (how much a per-area term would add, if it helped).
 
     python benchmarks/estimators_vs_slicer.py [--models bunny bb-bunny tpose] [--poses 8] [--seed 0]
 """
@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import supportless as sl
-from supportless.objective import projected_risky_area
+from supportless.energies.overhang import projected_risky_area
 from supportless.report import intersecting_face_pairs
 from supportless.slicer import find_prusa_slicer, slice_check
 

@@ -40,7 +40,7 @@ def run(name: str, args) -> dict:
     t0 = time.perf_counter()
     res = sl.optimize(rig, particles=args.particles, iterations=args.iterations, seed=args.seed,
                       w_arap=args.w_arap, w_overhang=args.w_overhang, w_intersect=args.w_intersect,
-                      overhang_model=args.overhang_model, overhang_offset=args.overhang_offset, free=args.free,
+                      overhang_model=args.overhang_model, free=args.free,
                       overhang_angle=args.overhang_angle, overhang_margin=args.overhang_margin, fix=args.fix, max_angle=args.max_angle)
     runtime = time.perf_counter() - t0
     rep = res.report
@@ -93,7 +93,6 @@ def main(argv=None):
     p.add_argument("--w-overhang", type=float, default=None)
     p.add_argument("--w-intersect", type=float, default=None)
     p.add_argument("--overhang-model", default="prism", choices=["prism", "column"])
-    p.add_argument("--overhang-offset", type=float, default=0.0)
     p.add_argument("--overhang-angle", type=float, default=45.0)
     p.add_argument("--overhang-margin", type=float, default=10.0)
     p.add_argument("--free", nargs="*", default=None)

@@ -109,9 +109,6 @@ def _search_options(f):
         click.option("--w-intersect", type=float, default=None, help="Weight of the self-intersection term."),
         click.option("--overhang-model", type=click.Choice(["prism", "column"]), default="prism",
                      show_default=True, help="Support estimate the search minimises."),
-        click.option("--overhang-offset", type=click.FloatRange(0, None), default=0.0, show_default=True,
-                     help="Add this fraction of the model's height per unit of supported footprint "
-                          "(slicers' interface and base layers); 0 is the paper's estimate."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]
@@ -121,7 +118,7 @@ def _search_options(f):
 
 
 def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap, w_overhang,
-                w_intersect, overhang_model, fix, free, quiet=False, overhang_offset=0.0, overhang_margin=10.0):
+                w_intersect, overhang_model, fix, free, quiet=False, overhang_margin=10.0):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .search import optimize
@@ -142,7 +139,7 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
             return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
                             overhang_angle=overhang_angle, overhang_margin=overhang_margin, w_arap=w_arap,
                             w_overhang=w_overhang, w_intersect=w_intersect, overhang_model=overhang_model,
-                            overhang_offset=overhang_offset, fix=_bone_list(fix),
+                            fix=_bone_list(fix),
                             free=_bone_list(free), callback=callback)
         except ValueError as exc:  # bad --fix/--free
             raise InputError(None, str(exc)) from None
@@ -219,7 +216,7 @@ def _write_outputs(rig, result, output, pose, report_path, pictures, console, sl
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles, iterations, seed, max_angle,
-             overhang_angle, overhang_margin, w_arap, w_overhang, w_intersect, overhang_model, overhang_offset, fix,
+             overhang_angle, overhang_margin, w_arap, w_overhang, w_intersect, overhang_model, fix,
              free, output, report_path, pose, pictures, slice_check_flag, quiet):
     """Search a pose of MODEL that needs less support, and write it."""
     from .io import MESH_FORMATS
@@ -230,8 +227,7 @@ def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles,
     console = _console()
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
     result = _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap,
-                         w_overhang, w_intersect, overhang_model, fix, free, quiet, overhang_offset,
-                         overhang_margin)
+                         w_overhang, w_intersect, overhang_model, fix, free, quiet, overhang_margin)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
     slice_report = None

@@ -54,13 +54,6 @@ class Objective:
         Rotation clusters of the reduced ARAP energy (None = one per element).
     resolution : int
         Ray-grid resolution of the intersection (and column) estimate.
-    overhang_offset : float
-        Extra support height per unit of risky footprint, as a fraction of the
-        model's rest height along up: adds ``offset * height * A_proj`` to the
-        overhang estimate, ``A_proj`` the risky faces' area projected on the
-        plate. Slicers lay interface and base layers under every supported
-        area however short the column, which the prism and column volumes do
-        not count; 0 (the default) is the paper's energy.
     backend : {"fast", "numpy"}
         ``fast``: numba kernels, parallel over poses; ``numpy``: the plain
         numpy implementations of the energies (slow; the reference).
@@ -68,7 +61,7 @@ class Objective:
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
-                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION, overhang_offset: float = 0.0,
+                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast"):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
@@ -80,7 +73,6 @@ class Objective:
         self.overhang_model = overhang_model
         self.clusters = clusters
         self.resolution = int(resolution)
-        self.overhang_offset = float(overhang_offset)
         if backend not in ("fast", "numpy"):
             raise ValueError(f"backend must be 'fast' or 'numpy', not {backend!r}")
         self.backend = backend
@@ -108,22 +100,12 @@ class Objective:
         return max(self.rest_overhang, 1e-3 * self.volume)
 
     # --------------------------------------------------------------- energies
-    @cached_property
-    def height(self) -> float:
-        """Rest height of the model along up."""
-        return float(np.ptp(self.rig.vertices @ self.rig.up))
-
     def overhang(self, vertices: np.ndarray) -> np.ndarray:
         """Raw overhang estimate of posed vertices, (P,) or float."""
         if self.overhang_model == "column":
-            value = support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
-                                   backend=self.backend)
-        else:
-            value = overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend)
-        if self.overhang_offset > 0:
-            value = value + self.overhang_offset * self.height * projected_risky_area(
-                vertices, self.rig.faces, self.rig.up, self.overhang_angle)
-        return value
+            return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
+                                  backend=self.backend)
+        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend)
 
     def raw_terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
         """The three energies before normalisation.
@@ -222,44 +204,5 @@ class Objective:
         """The weights and options, for reports."""
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
-                "overhang_offset": self.overhang_offset,
                 "clusters": self.clusters, "resolution": self.resolution}
 
-
-def projected_risky_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray,
-                         overhang_angle: float = 45.0) -> np.ndarray:
-    """Area of the risky faces projected on the build plate.
-
-    Parameters
-    ----------
-    vertices : (P, n, d) or (n, d) float64
-        Outward-oriented surface (counter-clockwise planar mesh in 2D).
-    faces : (f, 3) int64
-    up : (d,) float64
-    overhang_angle : float
-        Degrees from the build plate.
-
-    Returns
-    -------
-    area : (P,) float64 or float
-        ``sum A_f |n_f . up|`` over faces with ``n_f . up < -cos(angle)``
-        (lengths of boundary edges in 2D).
-    """
-    V = np.asarray(vertices, np.float64)
-    single = V.ndim == 2
-    V = V[None] if single else V
-    up = np.asarray(up, np.float64) / np.linalg.norm(up)
-    tau = np.cos(np.radians(overhang_angle))
-    if V.shape[-1] == 3:
-        a, b, c = V[:, faces[:, 0]], V[:, faces[:, 1]], V[:, faces[:, 2]]
-        scaled_normal = 0.5 * np.cross(b - a, c - a)  # area * unit normal
-    else:
-        from .energies.overhang import boundary_edges
-
-        E = boundary_edges(faces, V[0])
-        d = V[:, E[:, 1]] - V[:, E[:, 0]]
-        scaled_normal = np.stack([d[..., 1], -d[..., 0]], -1)  # length * outward normal
-    along = scaled_normal @ up
-    size = np.linalg.norm(scaled_normal, axis=-1)
-    out = np.where(along < -tau * size, -along, 0.0).sum(-1)
-    return float(out[0]) if single else out

@@ -292,8 +292,7 @@ def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
 def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int = 0, max_angle: float = 30.0,
              overhang_angle: float = 45.0, overhang_margin: float = OVERHANG_MARGIN,
              w_arap: float | None = None, w_overhang: float | None = None,
-             w_intersect: float | None = None, overhang_model: str = "prism", overhang_offset: float = 0.0,
-             fix=None, free=None,
+             w_intersect: float | None = None, overhang_model: str = "prism", fix=None, free=None,
              preset: str = "standard", objective: Objective | None = None, exact_intersections: bool = True,
              start: np.ndarray | None = None,
              callback: Callable[[int, dict], bool | None] | None = None) -> PoseResult:
@@ -317,8 +316,6 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
     w_arap, w_overhang, w_intersect : float, optional
         Weights of the normalised terms (defaults in :mod:`supportless.objective`).
     overhang_model : {"prism", "column"}
-    overhang_offset : float
-        Footprint term of the support estimate, see :class:`Objective`.
     fix, free : list, optional
         Bones to fix / free (1-based numbers), see :func:`resolve_fixed_bones`.
     preset : {"standard", "libigl"}
@@ -353,8 +350,7 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         kw = {k: v for k, v in dict(w_arap=w_arap, w_overhang=w_overhang, w_intersect=w_intersect).items()
               if v is not None}
         objective = Objective(rig, overhang_angle=min(overhang_angle + overhang_margin, 89.0),
-                              overhang_model=overhang_model,
-                              overhang_offset=overhang_offset, **kw)
+                              overhang_model=overhang_model, **kw)
     fixed = resolve_fixed_bones(rig, fix, free)
     free_mask = angle_layout(rig, fixed)
     k = int(free_mask.sum())

@@ -73,35 +73,6 @@ def test_column_model_option(rig):
         sl.Objective(rig, overhang_model="cone")
 
 
-def test_projected_risky_area_of_a_box_is_its_bottom():
-    import trimesh
-
-    from supportless.objective import projected_risky_area
-
-    box = trimesh.creation.box(extents=(2.0, 1.0, 3.0))
-    V = np.asarray(box.vertices)
-    F = np.asarray(box.faces)
-    assert np.isclose(projected_risky_area(V, F, np.array([0.0, 1.0, 0.0])), 2.0 * 3.0)
-    assert np.isclose(projected_risky_area(V, F, np.array([0.0, 0.0, 1.0])), 2.0 * 1.0)
-    # a tilt of 30 degrees keeps the bottom risky at 45 degrees; its projection is unchanged
-    R = trimesh.transformations.rotation_matrix(np.radians(30), [1, 0, 0])[:3, :3]
-    batch = np.stack([V, V @ R.T])
-    out = projected_risky_area(batch, F, np.array([0.0, 1.0, 0.0]))
-    assert out.shape == (2,)
-    assert np.isclose(out[1], 2.0 * 3.0 * np.cos(np.radians(30)), rtol=1e-9)
-
-
-def test_overhang_offset_adds_footprint_term(rig):
-    from supportless.objective import projected_risky_area
-
-    plain = sl.Objective(rig)
-    off = sl.Objective(rig, overhang_offset=0.1)
-    A = random_angles(rig, 3, seed=4)
-    V = rig.pose(A)
-    expected = plain.overhang(V) + 0.1 * off.height * projected_risky_area(V, rig.faces, rig.up)
-    np.testing.assert_allclose(off.overhang(V), expected, rtol=1e-12)
-
-
 def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
     obj = sl.Objective(rig)
     A = random_angles(rig, 40, scale=1.2, seed=7)

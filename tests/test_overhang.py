@@ -256,3 +256,27 @@ def test_bad_up_raises():
         overhang_energy(V, F, [0.0, 0.0, 0.0])
     with pytest.raises(ValueError):
         overhang_energy(V, F, [0.0, 1.0])
+
+
+def test_projected_risky_area_of_a_box_is_its_bottom():
+    import trimesh
+
+    from supportless.energies.overhang import projected_risky_area
+
+    box = trimesh.creation.box(extents=(2.0, 1.0, 3.0))
+    V = np.asarray(box.vertices)
+    F = np.asarray(box.faces)
+    assert np.isclose(projected_risky_area(V, F, np.array([0.0, 1.0, 0.0])), 2.0 * 3.0)
+    assert np.isclose(projected_risky_area(V, F, np.array([0.0, 0.0, 1.0])), 2.0 * 1.0)
+    # a tilt of 30 degrees keeps the bottom risky at 45 degrees; its projection is unchanged
+    R = trimesh.transformations.rotation_matrix(np.radians(30), [1, 0, 0])[:3, :3]
+    batch = np.stack([V, V @ R.T])
+    out = projected_risky_area(batch, F, np.array([0.0, 1.0, 0.0]))
+    assert out.shape == (2,)
+    assert np.isclose(out[1], 2.0 * 3.0 * np.cos(np.radians(30)), rtol=1e-9)
+
+    # either winding, and the 2D analogue: a unit-square grid's bottom edge has length 3
+    assert np.isclose(projected_risky_area(V, F[:, ::-1], np.array([0.0, 1.0, 0.0])), 6.0)
+    V2, F2 = cells_mesh([(0, 0), (1, 0), (2, 0), (1, 1)])
+    assert np.isclose(projected_risky_area(V2, F2, np.array([0.0, 1.0])), 3.0)
+    assert np.isclose(projected_risky_area(V2, F2[:, ::-1], np.array([0.0, 1.0])), 3.0)

@@ -26,7 +26,7 @@ from numba import njit, prange
 
 from ._raycast import boundary_edges, check_backend, orientation_sign, prepare
 
-__all__ = ["overhang_energy", "risky_faces", "risky_area", "boundary_edges"]
+__all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area", "boundary_edges"]
 
 
 @njit(cache=True, parallel=True)
@@ -246,3 +246,40 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     """
     out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
     return _out(out[:, 0], single)
+
+
+def projected_risky_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray,
+                         overhang_angle: float = 45.0) -> np.ndarray:
+    """Area of the risky faces projected on the build plate.
+
+    Parameters
+    ----------
+    vertices : (P, n, d) or (n, d) float64
+        Closed surface (3D) or planar triangle mesh (2D), either winding.
+    faces : (f, 3) int64
+    up : (d,) float64
+    overhang_angle : float
+        Degrees from the build plate.
+
+    Returns
+    -------
+    area : (P,) float64 or float
+        ``sum A_f |n_f . up|`` over faces with ``n_f . up < -cos(angle)``
+        (lengths of boundary edges in 2D).
+    """
+    V = np.asarray(vertices, np.float64)
+    single = V.ndim == 2
+    V = V[None] if single else V
+    up = np.asarray(up, np.float64) / np.linalg.norm(up)
+    tau = np.cos(np.radians(overhang_angle))
+    if V.shape[-1] == 3:
+        a, b, c = V[:, faces[:, 0]], V[:, faces[:, 1]], V[:, faces[:, 2]]
+        scaled_normal = 0.5 * np.cross(b - a, c - a)  # area * unit normal
+    else:
+        E = boundary_edges(faces)  # triangle direction; orientation_sign below makes it outward
+        d = V[:, E[:, 1]] - V[:, E[:, 0]]
+        scaled_normal = np.stack([d[..., 1], -d[..., 0]], -1)  # length * outward normal
+    along = (scaled_normal @ up) * orientation_sign(V, faces)[:, None]  # either winding
+    size = np.linalg.norm(scaled_normal, axis=-1)
+    out = np.where(along < -tau * size, -along, 0.0).sum(-1)
+    return float(out[0]) if single else out
