@@ -11,24 +11,9 @@ from supportless.energies.overhang import (
     risky_faces,
 )
 
+from meshes import box, cells_mesh, t_shape, union
+
 UP = np.array([0.0, 0.0, 1.0])
-
-
-def box(lo, hi):
-    m = trimesh.creation.box(bounds=[lo, hi])
-    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
-
-
-def union(*meshes):
-    ms = [trimesh.Trimesh(v, f, process=False) for v, f in meshes]
-    u = trimesh.boolean.union(ms, engine="manifold")
-    assert u.is_watertight
-    return np.asarray(u.vertices, float), np.asarray(u.faces, np.int64)
-
-
-def t_shape():
-    """Stem 1x1x3 on the plate, arm 4x1x1 on top; arm undersides (area 3) at z=2."""
-    return union(box([-0.5, -0.5, 0], [0.5, 0.5, 3]), box([-2, -0.5, 2], [2, 0.5, 3]))
 
 
 def tilted_arm_shape(angle_deg):
@@ -38,23 +23,6 @@ def tilted_arm_shape(angle_deg):
     a = np.deg2rad(angle_deg)
     R = np.array([[np.cos(a), 0, -np.sin(a)], [0, 1, 0], [np.sin(a), 0, np.cos(a)]])
     return union(stem, (v @ R.T + [0, 0, 1.5], f))
-
-
-def cells_mesh(cells):
-    """2D counter-clockwise triangle mesh of unit grid cells (welded)."""
-    idx = {}
-    verts, faces = [], []
-
-    def vid(p):
-        if p not in idx:
-            idx[p] = len(verts)
-            verts.append(p)
-        return idx[p]
-
-    for x, y in cells:
-        a, b, c, d = vid((x, y)), vid((x + 1, y)), vid((x + 1, y + 1)), vid((x, y + 1))
-        faces += [(a, b, c), (a, c, d)]
-    return np.array(verts, float), np.array(faces, np.int64)
 
 
 def t_shape_2d():

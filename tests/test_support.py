@@ -7,21 +7,10 @@ import trimesh
 from supportless.energies.overhang import overhang_energy
 from supportless.energies.support import support_volume
 
+from meshes import box_mesh as box
+from meshes import cells_mesh, t_shape, union
+
 UP = np.array([0.0, 0.0, 1.0])
-
-
-def box(lo, hi):
-    return trimesh.creation.box(bounds=[lo, hi])
-
-
-def union(*ms):
-    u = trimesh.boolean.union(list(ms), engine="manifold")
-    assert u.is_watertight
-    return np.asarray(u.vertices, float), np.asarray(u.faces, np.int64)
-
-
-def t_shape():
-    return union(box([-0.5, -0.5, 0], [0.5, 0.5, 3]), box([-2, -0.5, 2], [2, 0.5, 3]))
 
 
 def arm_over_base():
@@ -31,21 +20,6 @@ def arm_over_base():
     columns are 2 long: support 6, while the prism energy counts 3*3 = 9.
     """
     return union(box([0, 0, 0], [4, 1, 1]), box([0, 0, 1], [1, 1, 3]), box([0, 0, 3], [4, 1, 4]))
-
-
-def cells_mesh(cells):
-    idx, verts, faces = {}, [], []
-
-    def vid(p):
-        if p not in idx:
-            idx[p] = len(verts)
-            verts.append(p)
-        return idx[p]
-
-    for x, y in cells:
-        a, b, c, d = vid((x, y)), vid((x + 1, y)), vid((x + 1, y + 1)), vid((x, y + 1))
-        faces += [(a, b, c), (a, c, d)]
-    return np.array(verts, float), np.array(faces, np.int64)
 
 
 def vertical_hits(mesh, x, y):
