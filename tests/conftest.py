@@ -15,6 +15,8 @@ import pytest
 
 import supportless as sl
 
+from meshes import box
+
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
@@ -70,25 +72,10 @@ def branch_files(tmp_path_factory) -> dict:
             "V": V, "F": F, "joints": J, "bones": B}
 
 
-def _box_surface(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0)):
-    """Closed, outward-oriented triangle surface of an axis-aligned box (8 vertices, 12 faces)."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    V = np.array([[(hi if (c >> a) & 1 else lo)[a] for a in range(3)] for c in range(8)], dtype=float)
-    F = np.array([
-        [0, 2, 1], [1, 2, 3],  # z = lo
-        [4, 5, 6], [5, 7, 6],  # z = hi
-        [0, 1, 4], [1, 5, 4],  # y = lo
-        [2, 6, 3], [3, 6, 7],  # y = hi
-        [0, 4, 2], [2, 4, 6],  # x = lo
-        [1, 3, 5], [3, 7, 5],  # x = hi
-    ], dtype=np.int64)
-    return V, F
-
-
 @pytest.fixture(scope="session")
 def box_surface():
     """A function ``(lo, hi) -> (V, F)``: the closed surface of an axis-aligned box."""
-    return _box_surface
+    return box
 
 
 @pytest.fixture(scope="session")

@@ -9,7 +9,7 @@ def box_mesh(lo, hi) -> trimesh.Trimesh:
     return trimesh.creation.box(bounds=[lo, hi])
 
 
-def box(lo, hi):
+def box(lo=(0.0, 0.0, 0.0), hi=(1.0, 1.0, 1.0)):
     """Axis-aligned box as ``(V (8, 3) float64, F (12, 3) int64)``."""
     m = box_mesh(lo, hi)
     return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)

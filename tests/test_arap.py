@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from meshes import box
 from supportless.energies.arap import (
     ArapData,
     arap_energy,
@@ -17,26 +18,6 @@ from supportless.energies.arap import (
 # ---------------------------------------------------------------- fixtures
 
 
-def _box_surface(lo, hi):
-    """Closed outward-oriented triangle surface of an axis-aligned box."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    V = np.array(
-        [[(hi if (c >> a) & 1 else lo)[a] for a in range(3)] for c in range(8)], dtype=float
-    )
-    F = np.array(
-        [
-            [0, 2, 1], [1, 2, 3],  # z = lo
-            [4, 5, 6], [5, 7, 6],  # z = hi
-            [0, 1, 4], [1, 5, 4],  # y = lo
-            [2, 6, 3], [3, 6, 7],  # y = hi
-            [0, 4, 2], [2, 4, 6],  # x = lo
-            [1, 3, 5], [3, 7, 5],  # x = hi
-        ],
-        dtype=np.int64,
-    )
-    return V, F
-
-
 def _sigmoid_weights(x, joints, tau=0.15):
     """Smooth partition of unity along x with bone boundaries at ``joints``."""
     s = 1.0 / (1.0 + np.exp(-(x[:, None] - np.asarray(joints)[None, :]) / tau))
@@ -45,7 +26,7 @@ def _sigmoid_weights(x, joints, tau=0.15):
 
 
 def _bar_tets(n_bones=3, max_vol=0.01):
-    Vs, Fs = _box_surface([0, 0, 0], [n_bones, 1, 1])
+    Vs, Fs = box([0, 0, 0], [n_bones, 1, 1])
     TV, TT, *_ = igl.copyleft.tetgen.tetrahedralize(Vs, Fs, flags=f"pq1.414a{max_vol}Q")
     W = _sigmoid_weights(TV[:, 0], np.arange(1, n_bones))
     return TV, TT, W

@@ -82,7 +82,8 @@ def test_merge_duplicate_vertices_keeps_a_clean_mesh_unchanged(box_surface):
     assert V2 is V and F2 is F
     Vd = np.vstack([V, V[:1], [[9.0, 9.0, 9.0]]])  # a duplicate of vertex 0 and an unused vertex
     Fd = F.copy()
-    Fd[0, 0] = 8
+    r, c = np.argwhere(F == 0)[0]
+    Fd[r, c] = 8  # one corner that used vertex 0 now uses its duplicate
     V3, F3 = io.merge_duplicate_vertices(Vd, Fd)
     np.testing.assert_array_equal(V3, V)
     np.testing.assert_array_equal(F3, F)
