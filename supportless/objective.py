@@ -25,6 +25,7 @@ from .energies import arap as arap_mod
 from .energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
 from .energies.overhang import overhang_energy
 from .energies.support import support_volume
+from .kinematics import skin
 from .rig import Rig, signed_volume
 
 #: Default weights of the normalised terms (see the module docstring).
@@ -107,6 +108,14 @@ class Objective:
                                   backend=self.backend)
         return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend)
 
+    def _posed(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bone transforms (P, m, d, d+1) and posed surface vertices (P, n, d) of a batch."""
+        transforms = self.rig.transforms(angles)
+        return transforms, skin(self.rig.lbs, transforms)
+
+    def _intersection(self, vertices: np.ndarray) -> np.ndarray:
+        return self_intersection_volume(vertices, self.rig.faces, self.rig.up, self.resolution, backend=self.backend)
+
     def raw_terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
         """The three energies before normalisation.
 
@@ -119,15 +128,11 @@ class Objective:
         terms : dict of str -> (P,) float64 (floats for a single pose)
             ``arap`` (volume units), ``overhang`` and ``intersection`` (volumes).
         """
-        transforms = self.rig.transforms(angles)
-        from .kinematics import skin
-
-        V = skin(self.rig.lbs, transforms)
+        transforms, V = self._posed(angles)
         return {
             "arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
             "overhang": self.overhang(V),
-            "intersection": self_intersection_volume(V, self.rig.faces, self.rig.up, self.resolution,
-                                                     backend=self.backend),
+            "intersection": self._intersection(V),
         }
 
     def normalise(self, raw: dict) -> dict:
@@ -182,18 +187,13 @@ class Objective:
             The objective where it is below ``bound``; elsewhere a lower bound
             of it that is at least ``bound``.
         """
-        from .kinematics import skin
-
-        transforms = self.rig.transforms(angles)
-        V = skin(self.rig.lbs, transforms)
-        values = (self.w_arap * arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend)
-                  / self.volume + self.w_overhang * self.overhang(V) / self.overhang_scale)
-        values = np.asarray(values, np.float64)
+        transforms, V = self._posed(angles)
+        partial = {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
+                   "overhang": self.overhang(V), "intersection": 0.0}
+        values = np.array(self.combine(self.normalise(partial)), np.float64)
         todo = np.flatnonzero(values < np.asarray(bound))
         if len(todo) and self.w_intersect != 0:
-            inter = self_intersection_volume(V[todo], self.rig.faces, self.rig.up, self.resolution,
-                                             backend=self.backend)
-            values[todo] += self.w_intersect * np.asarray(inter) / self.volume
+            values[todo] += self.w_intersect * np.asarray(self._intersection(V[todo])) / self.volume
         return values
 
     def __call__(self, angles: np.ndarray) -> np.ndarray:
