@@ -80,8 +80,13 @@ def test_swarm_callback_stops_and_ctrl_c_keeps_best():
     assert res.interrupted and np.isfinite(res.value) and len(res.history) == 3
 
 
-def test_presets_are_known():
-    assert set(PSO_PRESETS) == {"standard", "libigl"}
+def test_libigl_preset_converges_where_inertia_alone_does_not():
+    kw = dict(particles=30, iterations=200, rng=np.random.default_rng(0))
+    res = particle_swarm(sphere, -np.ones(4), np.ones(4), **kw, **PSO_PRESETS["libigl"])
+    assert res.value < 1e-3
+    drift = particle_swarm(sphere, -np.ones(4), np.ones(4), particles=30, iterations=200,
+                           rng=np.random.default_rng(0), inertia=0.98, cognitive=0.0, social=0.0)
+    assert drift.value > 1e-2  # the cognitive and social terms are what converge
 
 
 @pytest.fixture(scope="module")
