@@ -269,7 +269,7 @@ def _slice(rig, posed_vertices, console, height_mm=60.0):
 def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output):
     """Apply a saved pose to MODEL and write the posed mesh."""
     from .io import read_pose, write_mesh
-    from .search import place_on_plate
+    from .geometry import place_on_plate
 
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
     angles = read_pose(pose, rig.bones)
@@ -287,7 +287,8 @@ def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output)
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
 def slice_check_cmd(original, posed, up, height_mm, as_json):
     """Measure the support PrusaSlicer lays down for ORIGINAL and POSED."""
-    from .io import parse_up, read_mesh
+    from .geometry import parse_up
+    from .io import read_mesh
     from .slicer import SlicerError, SlicerNotFound, slice_check
 
     up_vec = parse_up(up)

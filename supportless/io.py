@@ -22,8 +22,6 @@ from .errors import InputError
 
 MESH_FORMATS = ("obj", "stl", "ply", "off", "3mf", "glb")
 
-_AXES = {"x": 0, "y": 1, "z": 2}
-
 
 # --------------------------------------------------------------------------- #
 # atomic writes
@@ -82,51 +80,6 @@ def _json_default(obj):
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"cannot write {type(obj).__name__} as JSON")
-
-
-# --------------------------------------------------------------------------- #
-# printing direction
-# --------------------------------------------------------------------------- #
-def parse_up(up, dim: int = 3) -> np.ndarray:
-    """Turn a printing direction into a unit vector.
-
-    Parameters
-    ----------
-    up : str or sequence of float
-        ``"x" | "y" | "z" | "-x" | "-y" | "-z"``, or three (``dim``) numbers,
-        as a sequence or as a string ``"0,1,0"`` / ``"0 1 0"``.
-    dim : int
-        2 for a planar figure (the z component is dropped; it must be 0), else 3.
-
-    Returns
-    -------
-    up : (dim,) float64
-        Unit vector.
-    """
-    if isinstance(up, str):
-        s = up.strip().lower()
-        sign = -1.0 if s.startswith("-") else 1.0
-        key = s.lstrip("+-")
-        if key in _AXES:
-            vec = np.zeros(3)
-            vec[_AXES[key]] = sign
-        else:
-            try:
-                vec = np.array([float(t) for t in s.replace(",", " ").split()])
-            except ValueError:
-                raise InputError(None, f"up direction {up!r} is not x|y|z|-x|-y|-z or three numbers") from None
-    else:
-        vec = np.asarray(up, dtype=float).ravel()
-    if vec.shape == (2,):
-        vec = np.append(vec, 0.0)
-    if vec.shape != (3,) or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
-        raise InputError(None, f"up direction {up!r} must be a nonzero vector of three numbers")
-    vec = vec / np.linalg.norm(vec)
-    if dim == 2:
-        if abs(vec[2]) > 1e-12:
-            raise InputError(None, f"up direction {up!r} must lie in the plane (z = 0) of a planar figure")
-        return vec[:2] / np.linalg.norm(vec[:2])
-    return vec
 
 
 # --------------------------------------------------------------------------- #

@@ -26,7 +26,8 @@ from .energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
 from .energies.overhang import overhang_energy
 from .energies.support import support_volume
 from .kinematics import skin
-from .rig import Rig, signed_volume
+from .geometry import signed_volume
+from .rig import Rig
 
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
@@ -58,12 +59,16 @@ class Objective:
     backend : {"fast", "numpy"}
         ``fast``: numba kernels, parallel over poses; ``numpy``: the plain
         numpy implementations of the energies (slow; the reference).
+    arap_data : supportless.energies.arap.ArapData, optional
+        Precomputed reduced ARAP operators of this rig (with these
+        ``clusters``), to share between objectives; computed on first use
+        otherwise.
     """
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
                  clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
-                 backend: str = "fast"):
+                 backend: str = "fast", arap_data: arap_mod.ArapData | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -77,6 +82,8 @@ class Objective:
         if backend not in ("fast", "numpy"):
             raise ValueError(f"backend must be 'fast' or 'numpy', not {backend!r}")
         self.backend = backend
+        if arap_data is not None:
+            self.__dict__["arap_data"] = arap_data  # fills the cached property below
 
     # ------------------------------------------------------------ precompute
     @cached_property

@@ -1,57 +1,46 @@
 """Reports of a pose: support before and after, distortion, intersections.
 
-:func:`pose_measures` measures one pose; :func:`build_report` puts the rest
-pose and the found pose side by side as the JSON report of ``optimize``.
+:func:`pose_measures` measures one pose (the command line's report and the
+browser app's panel both use it); :func:`build_report` puts the rest pose and
+a search's pose side by side as the JSON report of ``optimize``;
+:func:`write_pictures` draws them.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import os
 import platform
+from pathlib import Path
 
 import numpy as np
 
+from .energies.exact import intersecting_face_pairs
 from .energies.intersection import self_intersection_volume
-from .energies.overhang import overhang_energy, risky_area
+from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.support import support_volume
+from .geometry import place_on_plate
+from .render import plot_convergence, render_before_after
+
+__all__ = ["build_report", "pose_measures", "reduction", "write_pictures"]
 
 
-def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
-    """Number of intersecting triangle pairs, by CGAL's exact test.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-    faces : (f, 3) int64
-
-    Returns
-    -------
-    pairs : int
-        0 for a surface free of self-intersections. Planar (2D) meshes are
-        checked by their overlapping area instead and return -1 here.
-    """
-    if vertices.shape[1] != 3:
-        return -1
-    import igl
-    import igl.copyleft.cgal  # noqa: F401
-
-    out = igl.copyleft.cgal.remesh_self_intersections(np.ascontiguousarray(vertices, np.float64),
-                                                      np.ascontiguousarray(faces, np.int64), detect_only=True)
-    IF = out[2]
-    return int(len(IF))
-
-
-def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None) -> dict:
+def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None,
+                  vertices: np.ndarray | None = None) -> dict:
     """Everything a report says about one pose.
 
     Parameters
     ----------
     objective : supportless.objective.Objective
+        The objective the search minimises; its value and terms are reported.
     angles : (m, 3) float64
     exact : bool
-        Also count intersecting face pairs exactly (CGAL; slower).
+        Also count intersecting face pairs exactly (CGAL; slower). 2D meshes
+        report -1.
     overhang_angle : float, optional
         Threshold of the support measures (default: the objective's).
+    vertices : (n, d) float64, optional
+        ``objective.rig.pose(angles)`` when the caller has it already.
 
     Returns
     -------
@@ -61,7 +50,7 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         objective, and ``intersecting_face_pairs``.
     """
     rig = objective.rig
-    V = rig.pose(angles)
+    V = rig.pose(angles) if vertices is None else vertices
     value, terms, raw = objective.evaluate(angles)
     angle = objective.overhang_angle if overhang_angle is None else overhang_angle
     out = {
@@ -80,31 +69,40 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
 
 
 def reduction(before: float, after: float) -> float | None:
-    """Percentage reduction ``100 (1 - after / before)``; None when ``before`` is 0."""
+    """Percentage reduction ``100 (1 - after / before)``.
+
+    Parameters
+    ----------
+    before, after : float
+        A quantity (support volume, filament length, ...) before and after.
+
+    Returns
+    -------
+    percent : float or None
+        Positive when ``after`` is smaller; None when ``before`` is not positive.
+    """
     return None if before <= 0 else 100.0 * (1.0 - after / before)
 
 
-def build_report(rig, objective, result, settings: dict, runtime: float, overhang_angle: float | None = None) -> dict:
-    """The JSON report of a pose search.
+def build_report(rig, result) -> dict:
+    """The JSON report of a pose search: the rest pose and the found pose side by side.
 
     Parameters
     ----------
     rig : Rig
-    objective : Objective
     result : supportless.search.PoseResult
-    settings : dict
-        The search settings, stored as given.
-    runtime : float
-        Seconds.
-    overhang_angle : float, optional
-        Threshold of the reported support measures (default: the objective's).
 
     Returns
     -------
     report : dict
+        Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
+        printer's threshold ``result.settings.overhang_angle``), their
+        ``reduction_percent``, the largest vertex displacement, the angles,
+        runtime, settings and convergence history.
     """
-    before = pose_measures(objective, rig.rest_angles(), overhang_angle=overhang_angle)
-    after = pose_measures(objective, result.angles, overhang_angle=overhang_angle)
+    objective, angle = result.objective, result.settings.overhang_angle
+    before = pose_measures(objective, rig.rest_angles(), overhang_angle=angle)
+    after = pose_measures(objective, result.angles, overhang_angle=angle)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
     return {
@@ -124,9 +122,9 @@ def build_report(rig, objective, result, settings: dict, runtime: float, overhan
         "max_vertex_displacement": float(displacement.max()),
         "max_vertex_displacement_relative_to_height": float(displacement.max() / height) if height else None,
         "angles_deg": np.degrees(result.angles).round(4).tolist(),
-        "runtime_seconds": float(runtime),
+        "runtime_seconds": float(result.runtime_seconds),
         "interrupted": bool(result.interrupted),
-        "settings": settings,
+        "settings": result.settings.to_dict() | {"fixed_bones": [int(b) + 1 for b in np.flatnonzero(result.fixed)]},
         "history": [float(v) for v in result.history],
         "term_history": {k: [float(x) for x in v] for k, v in result.term_history.items()},
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
@@ -135,32 +133,30 @@ def build_report(rig, objective, result, settings: dict, runtime: float, overhan
 
 
 def _cpu_count() -> int:
-    import os
-
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def write_pictures(folder, rig, result) -> list[tuple[str, str]]:
+def write_pictures(folder, rig, result, report: dict | None = None) -> list[tuple[str, str]]:
     """Before/after renders (same camera, risky faces red, skeleton drawn) and a convergence plot.
+
+    Risky faces are those past the printer's threshold
+    (``result.settings.overhang_angle``), as the report counts them.
 
     Parameters
     ----------
     folder : str or os.PathLike
     rig : Rig
     result : supportless.search.PoseResult
+    report : dict, optional
+        Its :func:`build_report`, for the reduction in the title.
 
     Returns
     -------
     written : list of (label, path)
     """
-    from pathlib import Path
-
-    from .energies.overhang import risky_faces
-    from .render import plot_convergence, render_before_after
-    from .search import place_on_plate
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    angle = result.settings.overhang_angle
     rest = place_on_plate(rig.vertices, rig.up)
     posed = result.vertices
     shift_rest = rest[0] - rig.vertices[0]
@@ -168,14 +164,14 @@ def write_pictures(folder, rig, result) -> list[tuple[str, str]]:
     joints_rest = rig.joints + shift_rest
     joints_posed = rig.posed_joints(result.angles) + shift_posed
     risky = rig.dim == 3
+    change = (report or {}).get("reduction_percent", {}).get("overhang_prism")
     before_after = render_before_after(
         folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
         before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
-        before_risky=risky_faces(rest, rig.faces, rig.up) if risky else None,
-        after_risky=risky_faces(posed, rig.faces, rig.up) if risky else None,
+        before_risky=risky_faces(rest, rig.faces, rig.up, angle) if risky else None,
+        after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
         titles=("rest pose", "found pose"),
-        suptitle=f"{rig.name}: support (prism) "
-                 f"{_fmt_pct(result.report.get('reduction_percent', {}).get('overhang_prism'))}; red = needs support")
+        suptitle=f"{rig.name}: support (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg)")
     terms = {k: v for k, v in result.term_history.items() if len(v)}
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")

@@ -25,7 +25,8 @@ import numpy as np
 
 from . import kinematics as kin
 from .errors import InputError
-from .io import atomic_path, check_closed_surface, parse_up, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .geometry import parse_up, signed_volume
+from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 
 #: Bump when the cached content or the way it is computed changes.
 CACHE_VERSION = 2
@@ -155,25 +156,6 @@ def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
     return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
 
 
-def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
-    """Enclosed volume of a closed surface (area of a planar mesh in 2D).
-
-    Parameters
-    ----------
-    V : (n, 3) or (n, 2) float64
-    F : (f, 3) int64
-
-    Returns
-    -------
-    volume : float
-        Positive for an outward-oriented surface (counter-clockwise in 2D).
-    """
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    if V.shape[1] == 2:
-        return float(0.5 * np.sum((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]))
-    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
-
-
 def _check_inputs(V, F, joints, bones, mesh_path=None, skel_path=None):
     """Validate and normalise arrays; returns (V, F, joints, dim)."""
     if len(bones) == 0:
@@ -284,7 +266,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     bones : (m, 2) int64
         0-based.
     up : str or (d,) float
-        Printing direction, see :func:`supportless.io.parse_up`.
+        Printing direction, see :func:`supportless.geometry.parse_up`.
     name : str
     samples_per_bone : int
         Volume-mesh vertices inserted along each bone.

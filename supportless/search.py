@@ -15,27 +15,13 @@ from typing import Callable
 
 import numpy as np
 
-from .kinematics import descendants
+from .energies.exact import intersecting_face_pairs
+from .geometry import place_on_plate
 from .objective import Objective
 from .rig import Rig
+from .settings import PSO_PRESETS, SearchSettings, angle_layout
 
-#: Velocity-update coefficients. ``standard`` is the constriction-factor swarm
-#: (Clerc & Kennedy); ``libigl`` reproduces igl::pso's constants.
-PSO_PRESETS = {
-    "standard": {"inertia": 0.7298, "cognitive": 1.49618, "social": 1.49618},
-    "libigl": {"inertia": 0.98, "cognitive": 0.01, "social": 0.01},
-}
-
-
-#: Degrees added to the overhang threshold during the search. A search that
-#: counts faces as risky only up to the printer's threshold parks them just
-#: past it, where a slicer (whose own threshold depends on layer height and
-#: extrusion width: PrusaSlicer's automatic one is about 53 degrees at its
-#: default 0.3 mm layers) still supports them. With a 10 degree margin the
-#: support PrusaSlicer lays down falls 53 % on the bunny instead of 20 %
-#: (benchmarks/RESULTS.md).
-OVERHANG_MARGIN = 10.0
-
+__all__ = ["PoseResult", "SwarmResult", "optimize", "particle_swarm"]
 
 @dataclass
 class SwarmResult:
@@ -174,68 +160,6 @@ def _reject_infeasible(values, X, threshold, feasible, skip=0):
 # --------------------------------------------------------------------------- #
 # pose search
 # --------------------------------------------------------------------------- #
-def plate_bones(rig: Rig, tolerance: float = 0.01) -> np.ndarray:
-    """Bones whose skin touches the build plate in the rest pose.
-
-    Parameters
-    ----------
-    rig : Rig
-    tolerance : float
-        Vertices within ``tolerance`` × the model's height of the lowest point
-        count as touching.
-
-    Returns
-    -------
-    mask : (m,) bool
-        The bones that dominate (largest weight on) a touching vertex.
-    """
-    h = rig.vertices @ rig.up
-    touching = h <= h.min() + tolerance * (h.max() - h.min())
-    mask = np.zeros(rig.bone_count, bool)
-    mask[np.unique(np.argmax(rig.weights[touching], axis=1))] = True
-    return mask
-
-
-def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None) -> np.ndarray:
-    """Which bones keep their rest rotation during the search.
-
-    By default the bones touching the build plate and every bone above them
-    in the hierarchy (so the parts on the plate stay where they are).
-
-    Parameters
-    ----------
-    rig : Rig
-    fix, free : list of int or str, optional
-        Bones to fix or free in addition to (or against) the default: 1-based
-        bone numbers as in the TGF file (ints or digit strings), or
-        ``"all"``.
-
-    Returns
-    -------
-    fixed : (m,) bool
-    """
-    m = rig.bone_count
-    fixed = plate_bones(rig)
-    for b in np.flatnonzero(fixed.copy()):
-        p = rig.parents[b]
-        while p >= 0:
-            fixed[p] = True
-            p = rig.parents[p]
-    for names, value in ((fix, True), (free, False)):
-        for name in names or []:
-            if str(name).lower() == "all":
-                fixed[:] = value
-                continue
-            try:
-                b = int(name) - 1
-            except ValueError:
-                raise ValueError(f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
-            if not 0 <= b < m:
-                raise ValueError(f"bone {name} is out of range 1..{m}")
-            fixed[b] = value
-    return fixed
-
-
 @dataclass
 class PoseResult:
     """Outcome of :func:`optimize`.
@@ -251,10 +175,28 @@ class PoseResult:
         Objective of the best pose.
     history : (iterations + 1,) float64
         Best objective per iteration.
-    terms : dict
+    terms : dict of str -> float
         Normalised terms of the best pose.
-    report : dict
-        The JSON report (see :func:`supportless.report.build_report`).
+    settings : SearchSettings
+        What the search was asked to do.
+    objective : Objective
+        What it minimised (for measuring poses afterwards).
+    interrupted : bool
+        True when the search stopped early (Ctrl-C or the callback).
+    fixed : (m,) bool
+        The bones that kept their rotation.
+    term_history : dict of str -> list of float
+        Normalised terms of the best pose after each iteration.
+    runtime_seconds : float
+        Wall time of the search.
+    stats : dict
+        Where the time went: ``exact_calls``/``exact_seconds`` (CGAL checks
+        of candidates for the swarm's best) and ``progress_calls``/
+        ``progress_seconds`` (terms of the best pose per iteration).
+
+    The JSON report of a result is built by its caller
+    (:func:`supportless.report.build_report`): it measures the rest pose and
+    the found pose, which the search itself does not need.
     """
 
     angles: np.ndarray
@@ -262,72 +204,44 @@ class PoseResult:
     value: float
     history: np.ndarray
     terms: dict
-    report: dict = field(default_factory=dict)
+    settings: SearchSettings
+    objective: Objective
     interrupted: bool = False
     fixed: np.ndarray | None = None
     term_history: dict = field(default_factory=dict)
+    runtime_seconds: float = 0.0
+    stats: dict = field(default_factory=dict)
 
 
-def angle_layout(rig: Rig, fixed: np.ndarray) -> np.ndarray:
-    """Which Euler angles the search varies.
+class _Timed:
+    """Wraps a callable and sums its calls and wall time into ``stats``."""
 
-    Returns
-    -------
-    free : (m, 3) bool
-        In 2D only the angle about the plane normal (index 2) of free bones.
-    """
-    free = np.zeros((rig.bone_count, 3), bool)
-    if rig.dim == 2:
-        free[~fixed, 2] = True
-    else:
-        free[~fixed] = True
-    return free
+    def __init__(self, fn: Callable, stats: dict, name: str):
+        self.fn, self.stats, self.name = fn, stats, name
+        stats[f"{name}_calls"], stats[f"{name}_seconds"] = 0, 0.0
 
-
-def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """Translate so the lowest point along ``up`` is at 0, (n, d) float64."""
-    return vertices - (vertices @ up).min() * up
+    def __call__(self, *args):
+        t = time.perf_counter()
+        try:
+            return self.fn(*args)
+        finally:
+            self.stats[f"{self.name}_seconds"] += time.perf_counter() - t
+            self.stats[f"{self.name}_calls"] += 1
 
 
-def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int = 0, max_angle: float = 30.0,
-             overhang_angle: float = 45.0, overhang_margin: float = OVERHANG_MARGIN,
-             w_arap: float | None = None, w_overhang: float | None = None,
-             w_intersect: float | None = None, overhang_model: str = "prism", fix=None, free=None,
-             preset: str = "standard", objective: Objective | None = None, exact_intersections: bool = True,
-             start: np.ndarray | None = None,
-             callback: Callable[[int, dict], bool | None] | None = None) -> PoseResult:
+def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Objective | None = None,
+             start: np.ndarray | None = None, callback: Callable[[int, dict], bool | None] | None = None,
+             **changes) -> PoseResult:
     """Find a pose of ``rig`` that needs less support, with a particle swarm.
 
     Parameters
     ----------
     rig : Rig
-    particles, iterations : int
-        Swarm size and number of iterations (the paper: 200 × 120).
-    seed : int
-        Same seed, same result.
-    max_angle : float
-        Bound of every free Euler angle, degrees (±).
-    overhang_angle : float
-        Overhang threshold, degrees from the build plate: what the report
-        counts as needing support.
-    overhang_margin : float
-        The search counts faces up to ``overhang_angle + overhang_margin`` as
-        needing support (degrees; see :data:`OVERHANG_MARGIN`).
-    w_arap, w_overhang, w_intersect : float, optional
-        Weights of the normalised terms (defaults in :mod:`supportless.objective`).
-    overhang_model : {"prism", "column"}
-    fix, free : list, optional
-        Bones to fix / free (1-based numbers), see :func:`resolve_fixed_bones`.
-    preset : {"standard", "libigl"}
-        Swarm coefficients, see :data:`PSO_PRESETS`.
+    settings : SearchSettings, optional
+        What to search (default: ``SearchSettings()``, the tool's defaults).
     objective : Objective, optional
-        Use this objective instead of building one from the weights.
-    exact_intersections : bool
-        Reject any pose whose surface has intersecting triangle pairs by
-        CGAL's exact test (3D), checked on every candidate for the swarm's
-        best. The ray-cast intersection energy steers the search away from
-        overlaps; this makes sure thin ones it cannot see never reach the
-        output.
+        Use this objective instead of ``settings.objective(rig)`` (e.g. one
+        whose ARAP operators are already computed).
     start : (m, 3) float64, optional
         A pose to start from (radians), e.g. one edited by hand: fixed bones
         keep its angles, and it is one of the initial particles (with the
@@ -335,26 +249,24 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
         than the start pose.
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
-        (normalised terms of the best pose) and ``angles``; return ``False`` to
-        stop.
+        (normalised terms of the best pose), ``angles`` and ``iterations``;
+        return ``False`` to stop.
+    **changes
+        Settings to change from ``settings`` (``particles=50``, ``seed=1``, ...).
 
     Returns
     -------
     result : PoseResult
         Never worse than the rest pose (the rest pose is one of the particles).
     """
-    from .report import build_report
-
     t0 = time.perf_counter()
+    settings = (settings or SearchSettings()).replace(**changes)
     if objective is None:
-        kw = {k: v for k, v in dict(w_arap=w_arap, w_overhang=w_overhang, w_intersect=w_intersect).items()
-              if v is not None}
-        objective = Objective(rig, overhang_angle=min(overhang_angle + overhang_margin, 89.0),
-                              overhang_model=overhang_model, **kw)
-    fixed = resolve_fixed_bones(rig, fix, free)
+        objective = settings.objective(rig)
+    fixed = settings.fixed_bones(rig)
     free_mask = angle_layout(rig, fixed)
     k = int(free_mask.sum())
-    limit = np.radians(max_angle)
+    limit = np.radians(settings.max_angle)
 
     base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
     if base.shape != (rig.bone_count, 3):
@@ -368,40 +280,38 @@ def optimize(rig: Rig, *, particles: int = 200, iterations: int = 120, seed: int
     def f(X, bound):
         return objective.bounded(to_angles(X), bound)
 
+    stats: dict = {}
     term_history = {"arap": [], "overhang": [], "intersection": []}
+    best_terms = _Timed(lambda x: objective.terms(to_angles(x[None])), stats, "progress")
 
     def on_iteration(it, x, value):
-        terms = {key: float(v[0]) for key, v in objective.terms(to_angles(x[None])).items()}
+        terms = {key: float(v[0]) for key, v in best_terms(x).items()}
         for key in term_history:
             term_history[key].append(terms[key])
         if callback is not None:
             return callback(it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
-                                 "iterations": iterations})
+                                 "iterations": settings.iterations})
         return None
 
     feasible = None
-    if exact_intersections and rig.dim == 3:
-        from .report import intersecting_face_pairs
-
-        def feasible(x):
+    if settings.exact_intersections and rig.dim == 3:
+        def no_intersection(x):
             return intersecting_face_pairs(rig.pose(to_angles(x[None])[0]), rig.faces) == 0
+
+        feasible = _Timed(no_intersection, stats, "exact")
 
     initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), base[free_mask]])
     if k == 0:
         swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
     else:
-        swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=particles,
-                               iterations=iterations, rng=np.random.default_rng(seed),
+        swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=settings.particles,
+                               iterations=settings.iterations, rng=np.random.default_rng(settings.seed),
                                initial=initial, callback=on_iteration, feasible=feasible,
-                               pass_bound=True, **PSO_PRESETS[preset])
+                               pass_bound=True, **PSO_PRESETS[settings.preset])
     angles = to_angles(swarm.x[None])[0]
     posed = place_on_plate(rig.pose(angles), rig.up)
     terms = {key: float(v) for key, v in objective.terms(angles).items()}
-    result = PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=swarm.history,
-                        terms=terms, interrupted=swarm.interrupted, fixed=fixed, term_history=term_history)
-    settings = dict(particles=particles, iterations=iterations, seed=seed, max_angle=max_angle, preset=preset,
-                    report_overhang_angle=overhang_angle,
-                    fixed_bones=[int(b) + 1 for b in np.flatnonzero(fixed)], **objective.settings())
-    result.report = build_report(rig, objective, result, settings, runtime=time.perf_counter() - t0,
-                                 overhang_angle=overhang_angle)
-    return result
+    return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=swarm.history,
+                      terms=terms, settings=settings, objective=objective, interrupted=swarm.interrupted,
+                      fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
+                      stats=stats)

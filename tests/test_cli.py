@@ -17,7 +17,7 @@ from click.testing import CliRunner
 
 import supportless as sl
 from supportless.cli import main
-from supportless.search import place_on_plate
+from supportless.geometry import place_on_plate
 
 EXE = Path(sys.executable).with_name("supportless")
 

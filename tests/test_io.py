@@ -7,7 +7,7 @@ import pytest
 
 import supportless as sl
 from supportless import io
-from supportless.rig import signed_volume
+from supportless.geometry import parse_up, signed_volume
 
 FORMATS = ["stl", "obj", "ply", "off", "3mf", "glb"]
 
@@ -347,17 +347,17 @@ def test_bad_pose_file(tmp_path, text):
                                           ("0,2,0", [0, 1, 0]), ("1 1 0", [2 ** -0.5, 2 ** -0.5, 0]),
                                           ((0, 0, 3), [0, 0, 1])])
 def test_parse_up(up, expected):
-    np.testing.assert_allclose(io.parse_up(up), expected, atol=1e-15)
+    np.testing.assert_allclose(parse_up(up), expected, atol=1e-15)
 
 
 def test_parse_up_2d_and_errors():
-    np.testing.assert_array_equal(io.parse_up("y", dim=2), [0, 1])
-    np.testing.assert_array_equal(io.parse_up("1,0"), [1, 0, 0])  # two numbers: z = 0
+    np.testing.assert_array_equal(parse_up("y", dim=2), [0, 1])
+    np.testing.assert_array_equal(parse_up("1,0"), [1, 0, 0])  # two numbers: z = 0
     for bad in ("w", "0,0,0", "1,2,3,4", "1 nan 0", (0, 1, 0, 0)):
         with pytest.raises(sl.InputError, match="up direction"):
-            io.parse_up(bad)
+            parse_up(bad)
     with pytest.raises(sl.InputError, match="in the plane"):
-        io.parse_up("z", dim=2)
+        parse_up("z", dim=2)
 
 
 def test_written_files_respect_the_umask(tmp_path, branch_mesh):

@@ -10,7 +10,7 @@ import pytest
 import supportless as sl
 from supportless import kinematics as kin
 from supportless.io import write_dmat, write_tet_mesh
-from supportless.rig import signed_volume
+from supportless.geometry import signed_volume
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.search import PSO_PRESETS, particle_swarm, place_on_plate, plate_bones, resolve_fixed_bones
+from supportless.geometry import place_on_plate
+from supportless.search import PSO_PRESETS, particle_swarm, plate_bones, resolve_fixed_bones
 
 
 def sphere(X):

@@ -9,7 +9,7 @@ import trimesh
 import supportless as sl
 from supportless.io import edge_counts
 from supportless.kinematics import bone_parents, topological_order
-from supportless.rig import signed_volume
+from supportless.geometry import signed_volume
 from supportless.shapes import DEMO_FIGURES, demo_figure
 
 

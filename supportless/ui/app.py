@@ -36,7 +36,8 @@ from ..energies.support import support_volume
 from ..errors import InputError, SupportlessError
 from ..objective import W_ARAP, W_INTERSECT, W_OVERHANG, Objective
 from ..report import reduction
-from ..search import OVERHANG_MARGIN, place_on_plate, resolve_fixed_bones
+from ..geometry import place_on_plate
+from ..search import OVERHANG_MARGIN, resolve_fixed_bones
 from .history import PoseHistory
 
 logger = logging.getLogger("supportless.ui")

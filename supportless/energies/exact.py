@@ -1,0 +1,65 @@
+"""Exact self-intersection test of a triangle surface (CGAL through libigl).
+
+The ray-grid estimate (:mod:`supportless.energies.intersection`) steers the
+search away from overlaps but cannot see overlaps thinner than a grid cell.
+This module answers exactly which triangle pairs intersect. It is the only
+place in the package that calls ``igl.copyleft.cgal`` (GPL-licensed CGAL code
+inside libigl's wheel).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["intersecting_faces", "intersecting_face_pairs"]
+
+
+def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The pairs of triangles that intersect each other, by CGAL's exact predicates.
+
+    Triangles that share a vertex or an edge and touch only there do not count.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        Face indices of each intersecting pair; ``k = 0`` for a surface free
+        of self-intersections.
+
+    Raises
+    ------
+    ValueError
+        For a planar (2D) mesh: its overlaps are areas, measured by
+        :func:`supportless.energies.intersection.self_intersection_volume`.
+    """
+    V = np.ascontiguousarray(vertices, np.float64)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise ValueError(f"vertices must be (n, 3) for the exact test, not {V.shape}")
+    import igl
+    import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
+
+    out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True)
+    return np.asarray(out[2], np.int64).reshape(-1, 2)
+
+
+def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """Number of intersecting triangle pairs (:func:`intersecting_faces`), -1 for a 2D mesh.
+
+    Parameters
+    ----------
+    vertices : (n, 3) or (n, 2) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    count : int
+        0 for a surface free of self-intersections; -1 for a planar mesh,
+        which has no exact test.
+    """
+    if np.shape(vertices)[-1] != 3:
+        return -1
+    return int(len(intersecting_faces(vertices, faces)))

@@ -1,0 +1,98 @@
+"""Small geometry shared by every layer: the printing direction, volumes, the plate.
+
+Nothing here knows about rigs, energies or searches; every other module may
+import it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["parse_up", "place_on_plate", "signed_volume"]
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def parse_up(up, dim: int = 3) -> np.ndarray:
+    """Turn a printing direction into a unit vector.
+
+    Parameters
+    ----------
+    up : str or sequence of float
+        ``"x" | "y" | "z" | "-x" | "-y" | "-z"``, or three (``dim``) numbers,
+        as a sequence or as a string ``"0,1,0"`` / ``"0 1 0"``.
+    dim : int
+        2 for a planar figure (the z component is dropped; it must be 0), else 3.
+
+    Returns
+    -------
+    up : (dim,) float64
+        Unit vector.
+
+    Raises
+    ------
+    InputError
+        For an unknown name, a zero or non-finite vector, or (``dim=2``) a
+        direction out of the plane.
+    """
+    if isinstance(up, str):
+        s = up.strip().lower()
+        sign = -1.0 if s.startswith("-") else 1.0
+        key = s.lstrip("+-")
+        if key in _AXES:
+            vec = np.zeros(3)
+            vec[_AXES[key]] = sign
+        else:
+            try:
+                vec = np.array([float(t) for t in s.replace(",", " ").split()])
+            except ValueError:
+                raise InputError(None, f"up direction {up!r} is not x|y|z|-x|-y|-z or three numbers") from None
+    else:
+        vec = np.asarray(up, dtype=float).ravel()
+    if vec.shape == (2,):
+        vec = np.append(vec, 0.0)
+    if vec.shape != (3,) or not np.all(np.isfinite(vec)) or np.linalg.norm(vec) == 0:
+        raise InputError(None, f"up direction {up!r} must be a nonzero vector of three numbers")
+    vec = vec / np.linalg.norm(vec)
+    if dim == 2:
+        if abs(vec[2]) > 1e-12:
+            raise InputError(None, f"up direction {up!r} must lie in the plane (z = 0) of a planar figure")
+        return vec[:2] / np.linalg.norm(vec[:2])
+    return vec
+
+
+def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    """Enclosed volume of a closed surface (area of a planar mesh in 2D).
+
+    Parameters
+    ----------
+    V : (n, 3) or (n, 2) float64
+    F : (f, 3) int64
+
+    Returns
+    -------
+    volume : float
+        Positive for an outward-oriented surface (counter-clockwise in 2D).
+    """
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    if V.shape[1] == 2:
+        return float(0.5 * np.sum((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Translate a surface so its lowest point along ``up`` is at 0.
+
+    Parameters
+    ----------
+    vertices : (n, d) float64
+    up : (d,) float64
+        Unit printing direction.
+
+    Returns
+    -------
+    placed : (n, d) float64
+    """
+    return vertices - (vertices @ up).min() * up

@@ -1,0 +1,242 @@
+"""What a pose search is asked to do: one frozen settings object.
+
+:class:`SearchSettings` is the single source of the search's defaults and of
+the rule that turns the printer's overhang threshold into the threshold the
+search minimises (``min(angle + margin, 89)``). It builds the
+:class:`~supportless.objective.Objective`, is stored in the report, and is
+what the command line, the browser app and the benchmarks pass around.
+
+The bone selection (which bones the search may rotate) lives here too: it turns
+the ``fix``/``free`` settings and the rig into the search's variables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, Objective
+from .rig import Rig
+
+__all__ = ["OVERHANG_MARGIN", "SearchSettings", "angle_layout", "plate_bones", "resolve_fixed_bones"]
+
+#: Degrees added to the overhang threshold during the search. A search that
+#: counts faces as risky only up to the printer's threshold parks them just
+#: past it, where a slicer (whose own threshold depends on layer height and
+#: extrusion width: PrusaSlicer's automatic one is about 53 degrees at its
+#: default 0.3 mm layers) still supports them. With a 10 degree margin the
+#: support PrusaSlicer lays down falls 53 % on the bunny instead of 20 %
+#: (benchmarks/RESULTS.md).
+OVERHANG_MARGIN = 10.0
+
+#: The steepest threshold the search uses, degrees (90 would count vertical walls).
+MAX_SEARCH_ANGLE = 89.0
+
+#: Velocity-update coefficients of the swarm. ``standard`` is the
+#: constriction-factor swarm (Clerc & Kennedy); ``libigl`` reproduces igl::pso's.
+PSO_PRESETS = {
+    "standard": {"inertia": 0.7298, "cognitive": 1.49618, "social": 1.49618},
+    "libigl": {"inertia": 0.98, "cognitive": 0.01, "social": 0.01},
+}
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """Every setting of a pose search, with the tool's defaults.
+
+    Attributes
+    ----------
+    particles, iterations : int
+        Swarm size and number of iterations (the paper: 200 x 120).
+    seed : int
+        Same seed, same result.
+    max_angle : float
+        Bound of every free Euler angle, degrees (±).
+    overhang_angle : float
+        The printer's overhang threshold, degrees from the build plate: what
+        reports count as needing support.
+    overhang_margin : float
+        The search counts faces up to ``overhang_angle + overhang_margin`` as
+        needing support (see :data:`OVERHANG_MARGIN`).
+    overhang_model : {"prism", "column"}
+        Support estimate the search minimises.
+    w_arap, w_overhang, w_intersect : float
+        Weights of the normalised terms.
+    fix, free : tuple of str
+        Bones to fix / free beyond the default (1-based numbers or ``"all"``),
+        see :func:`resolve_fixed_bones`.
+    preset : {"standard", "libigl"}
+        Swarm coefficients, see :data:`PSO_PRESETS`.
+    exact_intersections : bool
+        Reject candidates for the swarm's best whose surface has intersecting
+        triangles (CGAL's exact test, 3D).
+    clusters : int or None
+        Rotation clusters of the reduced ARAP energy.
+    resolution : int
+        Ray-grid resolution of the intersection (and column) estimate.
+    backend : {"fast", "numpy"}
+        Energy kernels: numba (parallel over poses) or the numpy reference.
+    """
+
+    particles: int = 200
+    iterations: int = 120
+    seed: int = 0
+    max_angle: float = 30.0
+    overhang_angle: float = 45.0
+    overhang_margin: float = OVERHANG_MARGIN
+    overhang_model: str = "prism"
+    w_arap: float = W_ARAP
+    w_overhang: float = W_OVERHANG
+    w_intersect: float = W_INTERSECT
+    fix: tuple = ()
+    free: tuple = ()
+    preset: str = "standard"
+    exact_intersections: bool = True
+    clusters: int | None = 100
+    resolution: int = 192
+    backend: str = "fast"
+
+    def __post_init__(self):
+        # bone lists arrive as lists, tuples or one comma-separated string
+        for name in ("fix", "free"):
+            value = getattr(self, name)
+            if isinstance(value, str):
+                value = [value]
+            items = tuple(t for v in (value or ()) for t in str(v).replace(",", " ").split())
+            object.__setattr__(self, name, items)
+        if self.overhang_model not in OVERHANG_MODELS:
+            raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {self.overhang_model!r}")
+        if self.preset not in PSO_PRESETS:
+            raise ValueError(f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
+        if self.particles < 1 or self.iterations < 0:
+            raise ValueError("particles must be at least 1 and iterations at least 0")
+        if not 0.0 <= self.overhang_angle <= 90.0:
+            raise ValueError(f"overhang_angle must be within 0..90 degrees, not {self.overhang_angle}")
+
+    @property
+    def search_overhang_angle(self) -> float:
+        """The threshold the search minimises: ``min(overhang_angle + overhang_margin, 89)`` degrees."""
+        return min(self.overhang_angle + self.overhang_margin, MAX_SEARCH_ANGLE)
+
+    def replace(self, **changes) -> SearchSettings:
+        """A copy with some settings changed (``None`` values are ignored)."""
+        return dataclasses.replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+    def objective(self, rig: Rig, arap_data=None) -> Objective:
+        """The objective the search minimises for ``rig``.
+
+        Parameters
+        ----------
+        rig : Rig
+        arap_data : supportless.energies.arap.ArapData, optional
+            Precomputed ARAP operators of ``rig`` to share (they depend on the
+            rig and ``clusters`` only).
+
+        Returns
+        -------
+        objective : Objective
+        """
+        return Objective(rig, w_arap=self.w_arap, w_overhang=self.w_overhang, w_intersect=self.w_intersect,
+                         overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
+                         clusters=self.clusters, resolution=self.resolution, backend=self.backend,
+                         arap_data=arap_data)
+
+    def fixed_bones(self, rig: Rig) -> np.ndarray:
+        """Which bones keep their rotation, (m,) bool (see :func:`resolve_fixed_bones`)."""
+        return resolve_fixed_bones(rig, self.fix, self.free)
+
+    def to_dict(self) -> dict:
+        """The settings as JSON-ready values, plus the derived ``search_overhang_angle``."""
+        out = dataclasses.asdict(self)
+        out["fix"], out["free"] = list(self.fix), list(self.free)
+        out["search_overhang_angle"] = self.search_overhang_angle
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict) -> SearchSettings:
+        """Settings from :meth:`to_dict` output (unknown and derived keys are ignored)."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+
+# --------------------------------------------------------------------------- #
+# which bones the search rotates
+# --------------------------------------------------------------------------- #
+def plate_bones(rig: Rig, tolerance: float = 0.01) -> np.ndarray:
+    """Bones whose skin touches the build plate in the rest pose.
+
+    Parameters
+    ----------
+    rig : Rig
+    tolerance : float
+        Vertices within ``tolerance`` × the model's height of the lowest point
+        count as touching.
+
+    Returns
+    -------
+    mask : (m,) bool
+        The bones that dominate (largest weight on) a touching vertex.
+    """
+    h = rig.vertices @ rig.up
+    touching = h <= h.min() + tolerance * (h.max() - h.min())
+    mask = np.zeros(rig.bone_count, bool)
+    mask[np.unique(np.argmax(rig.weights[touching], axis=1))] = True
+    return mask
+
+
+def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None) -> np.ndarray:
+    """Which bones keep their rest rotation during the search.
+
+    By default the bones touching the build plate and every bone above them
+    in the hierarchy (so the parts on the plate stay where they are).
+
+    Parameters
+    ----------
+    rig : Rig
+    fix, free : list of int or str, optional
+        Bones to fix or free in addition to (or against) the default: 1-based
+        bone numbers as in the TGF file (ints or digit strings), or
+        ``"all"``.
+
+    Returns
+    -------
+    fixed : (m,) bool
+    """
+    m = rig.bone_count
+    fixed = plate_bones(rig)
+    for b in np.flatnonzero(fixed.copy()):
+        p = rig.parents[b]
+        while p >= 0:
+            fixed[p] = True
+            p = rig.parents[p]
+    for names, value in ((fix, True), (free, False)):
+        for name in names or []:
+            if str(name).lower() == "all":
+                fixed[:] = value
+                continue
+            try:
+                b = int(name) - 1
+            except ValueError:
+                raise ValueError(f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
+            if not 0 <= b < m:
+                raise ValueError(f"bone {name} is out of range 1..{m}")
+            fixed[b] = value
+    return fixed
+
+
+def angle_layout(rig: Rig, fixed: np.ndarray) -> np.ndarray:
+    """Which Euler angles the search varies.
+
+    Returns
+    -------
+    free : (m, 3) bool
+        In 2D only the angle about the plane normal (index 2) of free bones.
+    """
+    free = np.zeros((rig.bone_count, 3), bool)
+    if rig.dim == 2:
+        free[~fixed, 2] = True
+    else:
+        free[~fixed] = True
+    return free
