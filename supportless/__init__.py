@@ -5,7 +5,8 @@ The pipeline (see the README): a closed surface and its skeleton become a
 bone pose it by linear blend skinning; three energies of the posed surface
 (ARAP distortion, overhang support, self-intersection volume) make the
 :class:`Objective`; :func:`optimize` searches the rotations with a particle
-swarm.
+swarm, as :class:`SearchSettings` say; :mod:`supportless.report` measures and
+draws the result.
 """
 
 from .energies.arap import arap_energy, arap_energy_direct, arap_precompute
@@ -18,12 +19,13 @@ from .kinematics import forward_kinematics, lbs_matrix, skin
 from .objective import Objective
 from .rig import Rig, load_rig, prepare_rig
 from .search import PoseResult, optimize, particle_swarm
+from .settings import SearchSettings
 from .shapes import DEMO_FIGURES, demo_figure
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "DEMO_FIGURES", "InputError", "Objective", "PoseResult", "Rig", "SupportlessError", "arap_energy",
+    "DEMO_FIGURES", "InputError", "Objective", "PoseResult", "Rig", "SearchSettings", "SupportlessError", "arap_energy",
     "arap_energy_direct", "arap_precompute", "demo_figure", "forward_kinematics", "lbs_matrix", "load_rig",
     "optimize", "overhang_energy", "particle_swarm", "prepare_rig", "read_mesh", "read_pose", "read_tgf",
     "risky_area", "risky_faces", "self_intersection_volume", "skin", "support_volume", "write_mesh",

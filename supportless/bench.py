@@ -63,10 +63,23 @@ def _fmt(seconds: float | None) -> str:
 
 
 def random_poses(rig, count: int, max_angle: float = 30.0, seed: int = 0) -> np.ndarray:
-    """``count`` random poses of the search's free bones within ±max_angle degrees, (count, m, 3)."""
-    from .search import angle_layout, resolve_fixed_bones
+    """Random poses of the search's free bones.
 
-    free = angle_layout(rig, resolve_fixed_bones(rig))
+    Parameters
+    ----------
+    rig : Rig
+    count : int
+    max_angle : float
+        Every free angle is uniform in ±``max_angle`` degrees.
+    seed : int
+
+    Returns
+    -------
+    angles : (count, m, 3) float64
+    """
+    from .settings import SearchSettings, angle_layout
+
+    free = angle_layout(rig, SearchSettings().fixed_bones(rig))
     rng = np.random.default_rng(seed)
     A = np.zeros((count, rig.bone_count, 3))
     lim = np.radians(max_angle)
@@ -74,53 +87,28 @@ def random_poses(rig, count: int, max_angle: float = 30.0, seed: int = 0) -> np.
     return A
 
 
-class _Counter:
-    """Wraps a callable and sums its wall time and calls."""
-
-    def __init__(self, fn):
-        self.fn = fn
-        self.calls = 0
-        self.seconds = 0.0
-
-    def __call__(self, *args, **kwargs):
-        t = time.perf_counter()
-        try:
-            return self.fn(*args, **kwargs)
-        finally:
-            self.seconds += time.perf_counter() - t
-            self.calls += 1
-
-
-def timed_search(rig, objective, particles: int, iterations: int, seed: int = 0) -> dict:
+def timed_search(rig, objective, settings) -> dict:
     """Run :func:`supportless.search.optimize` and split its wall time.
 
-    Returns a dict with ``seconds``, ``result`` (the PoseResult), the exact
-    check's ``cgal_seconds``/``cgal_calls`` and the progress terms'
-    ``progress_seconds``/``progress_calls`` (single-pose ``terms`` calls).
+    Parameters
+    ----------
+    rig : Rig
+    objective : Objective
+        Already set up (its precomputation is timed elsewhere).
+    settings : SearchSettings
+
+    Returns
+    -------
+    timing : dict
+        ``seconds``, ``result`` (the PoseResult) and the search's own
+        ``stats``: the exact check's ``exact_seconds``/``exact_calls`` and the
+        progress terms' ``progress_seconds``/``progress_calls``.
     """
-    from . import report
     from .search import optimize
 
-    cgal = _Counter(report.intersecting_face_pairs)
-    single = _Counter(objective.terms)
-    terms = objective.terms
-
-    def split_terms(angles):
-        if np.ndim(angles) == 3 and len(angles) == 1:
-            return single(angles)
-        return terms(angles)
-
-    objective.terms = split_terms  # instance attribute, removed below
-    report.intersecting_face_pairs = cgal
-    try:
-        t = time.perf_counter()
-        result = optimize(rig, particles=particles, iterations=iterations, seed=seed, objective=objective)
-        seconds = time.perf_counter() - t
-    finally:
-        report.intersecting_face_pairs = cgal.fn
-        del objective.terms
-    return {"seconds": seconds, "result": result, "cgal_seconds": cgal.seconds, "cgal_calls": cgal.calls,
-            "progress_seconds": single.seconds, "progress_calls": single.calls}
+    t = time.perf_counter()
+    result = optimize(rig, settings, objective=objective)
+    return {"seconds": time.perf_counter() - t, "result": result, **result.stats}
 
 
 def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iterations: int = 120,
@@ -129,9 +117,8 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
 
     Returns the measured times: ``{"rows": [(stage, {backend: seconds}, per_pose_count, note)], ...}``.
     """
-    from .objective import Objective
-    from .search import OVERHANG_MARGIN
     from .rig import load_rig
+    from .settings import SearchSettings
 
     backends = ["fast", "numpy"] if backend == "both" else [backend]
     with tempfile.TemporaryDirectory(prefix="supportless-bench-") as tmp:
@@ -148,8 +135,8 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
     times: dict[str, dict] = {}
     search_info = {}
     for b in backends:
-        # the objective the search minimises by default (threshold + search margin)
-        obj = Objective(rig, backend=b, overhang_angle=45.0 + OVERHANG_MARGIN)
+        settings = SearchSettings(particles=particles, iterations=iterations, backend=b)
+        obj = settings.objective(rig)  # what the search minimises by default
         t = time.perf_counter()
         obj.arap_data, obj.rest_overhang  # noqa: B018 -- precompute (once per rig)
         obj(swarm[:2])  # warm-up: numba compilation / caches
@@ -163,7 +150,7 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
             times[b]["search"] = (iterations + 1) * iter_t + iterations * pose_t
             times[b]["search_note"] = "extrapolated"
         else:
-            s = timed_search(rig, obj, particles, iterations)
+            s = timed_search(rig, obj, settings)
             times[b]["search"] = s["seconds"]
             search_info[b] = s
     rows = [
@@ -196,8 +183,8 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
         echo(f"  {b} search: overhang {100 * (1 - r.terms['overhang']):.1f} % below the rest pose, "
              f"self-intersection {100 * r.terms['intersection']:.3f} % of the volume, "
              f"E_arap/vol {r.terms['arap']:.4f}, objective {r.value:.4f}")
-        echo(f"  {b} search time: exact CGAL checks {_fmt(s['cgal_seconds'])} ({s['cgal_calls']} calls, "
-             f"{100 * s['cgal_seconds'] / s['seconds']:.0f} %), progress terms {_fmt(s['progress_seconds'])} "
+        echo(f"  {b} search time: exact CGAL checks {_fmt(s.get('exact_seconds', 0.0))} "
+             f"({s.get('exact_calls', 0)} calls, {100 * s.get('exact_seconds', 0.0) / s['seconds']:.0f} %), progress terms {_fmt(s['progress_seconds'])} "
              f"({s['progress_calls']} calls, {100 * s['progress_seconds'] / s['seconds']:.0f} %)")
     return {"rig": repr(rig), "cold": cold, "cached": cached, "times": times,
             "search": {b: {k: v for k, v in s.items() if k != "result"} | {"terms": s["result"].terms}

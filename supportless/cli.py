@@ -17,6 +17,8 @@ import numpy as np
 from .errors import InputError, SupportlessError
 
 EXIT_USER_ERROR = 2
+#: Exit status when a tool the command needs (PrusaSlicer) is missing or fails.
+EXIT_MISSING_TOOL = 3
 
 
 def _fail(message: str) -> None:
@@ -93,21 +95,29 @@ def prepare(model, skeleton, up, tets, weights, no_cache, cache_dir):
 
 # --------------------------------------------------------------------------- #
 def _search_options(f):
+    """The search's options; their defaults are :class:`~supportless.settings.SearchSettings`'s."""
+    from .settings import SearchSettings
+
+    d = SearchSettings()
     opts = [
-        click.option("--particles", default=200, show_default=True, type=click.IntRange(2, None)),
-        click.option("--iterations", default=120, show_default=True, type=click.IntRange(0, None)),
-        click.option("--seed", default=0, show_default=True, type=int),
-        click.option("--max-angle", default=30.0, show_default=True, type=click.FloatRange(0, 180),
+        click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
+        click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
+        click.option("--seed", default=d.seed, show_default=True, type=int),
+        click.option("--max-angle", default=d.max_angle, show_default=True, type=click.FloatRange(0, 180),
                      help="Bound of every free Euler angle, degrees."),
-        click.option("--overhang-angle", default=45.0, show_default=True, type=click.FloatRange(0, 90),
+        click.option("--overhang-angle", default=d.overhang_angle, show_default=True, type=click.FloatRange(0, 90),
                      help="Overhang threshold, degrees from the build plate."),
-        click.option("--overhang-margin", default=10.0, show_default=True, type=click.FloatRange(0, 45),
+        click.option("--overhang-margin", default=d.overhang_margin, show_default=True,
+                     type=click.FloatRange(0, 45),
                      help="The search treats faces up to threshold + margin as needing support, so none "
                           "are left just past the threshold, where slicers still support them."),
-        click.option("--w-arap", type=float, default=None, help="Weight of the distortion term."),
-        click.option("--w-overhang", type=float, default=None, help="Weight of the support term."),
-        click.option("--w-intersect", type=float, default=None, help="Weight of the self-intersection term."),
-        click.option("--overhang-model", type=click.Choice(["prism", "column"]), default="prism",
+        click.option("--w-arap", type=float, default=d.w_arap, show_default=True,
+                     help="Weight of the distortion term."),
+        click.option("--w-overhang", type=float, default=d.w_overhang, show_default=True,
+                     help="Weight of the support term."),
+        click.option("--w-intersect", type=float, default=d.w_intersect, show_default=True,
+                     help="Weight of the self-intersection term."),
+        click.option("--overhang-model", type=click.Choice(["prism", "column"]), default=d.overhang_model,
                      show_default=True, help="Support estimate the search minimises."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
@@ -117,8 +127,18 @@ def _search_options(f):
     return f
 
 
-def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap, w_overhang,
-                w_intersect, overhang_model, fix, free, quiet=False, overhang_margin=10.0):
+def _settings(**options):
+    """The :class:`~supportless.settings.SearchSettings` of the search options."""
+    from .settings import SearchSettings
+
+    try:
+        return SearchSettings(**options)
+    except ValueError as exc:
+        raise InputError(None, str(exc)) from None
+
+
+def _run_search(rig, console, settings, quiet=False):
+    """Run the search with a progress bar; returns the PoseResult."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .search import optimize
@@ -127,7 +147,7 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
                         TimeElapsedColumn(), TextColumn("{task.fields[status]}"), console=console, disable=quiet,
                         transient=False)
     with progress:
-        task = progress.add_task("search", total=iterations, status="")
+        task = progress.add_task("search", total=settings.iterations, status="")
 
         def callback(it, info):
             t = info["terms"]
@@ -136,18 +156,10 @@ def _run_search(rig, console, particles, iterations, seed, max_angle, overhang_a
                                                        f"· intersect {t['intersection']:.3f}")
 
         try:
-            return optimize(rig, particles=particles, iterations=iterations, seed=seed, max_angle=max_angle,
-                            overhang_angle=overhang_angle, overhang_margin=overhang_margin, w_arap=w_arap,
-                            w_overhang=w_overhang, w_intersect=w_intersect, overhang_model=overhang_model,
-                            fix=_bone_list(fix),
-                            free=_bone_list(free), callback=callback)
-        except ValueError as exc:  # bad --fix/--free
+            settings.fixed_bones(rig)  # a bad --fix/--free is reported before the search starts
+        except ValueError as exc:
             raise InputError(None, str(exc)) from None
-
-
-def _bone_list(values) -> list[str]:
-    """``--fix 3 --fix 4`` and ``--fix 3,4`` both give ``["3", "4"]``."""
-    return [v for item in values for v in str(item).replace(",", " ").split()]
+        return optimize(rig, settings, callback=callback)
 
 
 def _summary_table(report: dict):
@@ -177,7 +189,8 @@ def _summary_table(report: dict):
     return table
 
 
-def _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report=None):
+def _write_outputs(rig, result, report, output, pose, report_path, pictures, console):
+    """Write the posed mesh, the pose, the pictures and the report; returns [(label, path)]."""
     from .io import write_json, write_mesh, write_pose
     from .report import write_pictures
 
@@ -189,12 +202,8 @@ def _write_outputs(rig, result, output, pose, report_path, pictures, console, sl
         write_pose(pose, result.angles, rig.bones, rig.joints, extra={"objective": result.value})
         written.append(("pose", pose))
     if pictures:
-        for label, path in write_pictures(pictures, rig, result):
-            written.append((label, path))
+        written += write_pictures(pictures, rig, result, report)
     if report_path:
-        report = dict(result.report)
-        if slice_report is not None:
-            report["slice_check"] = slice_report
         write_json(report_path, report)
         written.append(("report", report_path))
     for label, path in written:
@@ -215,49 +224,67 @@ def _write_outputs(rig, result, output, pose, report_path, pictures, console, sl
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, particles, iterations, seed, max_angle,
-             overhang_angle, overhang_margin, w_arap, w_overhang, w_intersect, overhang_model, fix,
-             free, output, report_path, pose, pictures, slice_check_flag, quiet):
+def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, report_path, pose, pictures,
+             slice_check_flag, quiet, **search_options):
     """Search a pose of MODEL that needs less support, and write it."""
     from .io import MESH_FORMATS
+    from .report import build_report
 
     ext = Path(output).suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError(output, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    settings = _settings(**search_options)
     console = _console()
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
-    result = _run_search(rig, console, particles, iterations, seed, max_angle, overhang_angle, w_arap,
-                         w_overhang, w_intersect, overhang_model, fix, free, quiet, overhang_margin)
+    result = _run_search(rig, console, settings, quiet)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
-    slice_report = None
+    report = build_report(rig, result)
+    _print_results(console, report)
+    _write_outputs(rig, result, report, output, pose, report_path, pictures, console)
     if slice_check_flag:
-        slice_report = _slice(rig, result.vertices, console)
-    _print_results(console, rig, result, slice_report)
-    _write_outputs(rig, result, output, pose, report_path, pictures, console, slice_report)
+        _slice_and_report(rig, result, report, report_path, console)
 
 
-def _print_results(console, rig, result, slice_report, say_if_no_slicer=False):
-    """The before/after table, the slicer's figures when there are some, and the search time."""
-    console.print(_summary_table(result.report))
-    if slice_report:
-        red = slice_report["reduction_percent"]
-        change = "no support before" if red is None else f"{red:.1f} % less"
-        console.print(f"PrusaSlicer support filament at {slice_report['height_mm']:g} mm tall: "
-                      f"{slice_report['before']['support_mm']:.0f} mm -> "
-                      f"{slice_report['after']['support_mm']:.0f} mm ({change})")
-    elif say_if_no_slicer and rig.dim == 3:
-        console.print("PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)")
-    console.print(f"search took {result.report['runtime_seconds']:.1f} s")
+def _print_results(console, report):
+    """The before/after table and the search time."""
+    console.print(_summary_table(report))
+    console.print(f"search took {report['runtime_seconds']:.1f} s")
 
 
-def _slice(rig, posed_vertices, console, height_mm=60.0):
-    from .slicer import slice_check
+def _slice_and_report(rig, result, report, report_path, console, required=True, height_mm=60.0):
+    """Slice the rest and the found pose with PrusaSlicer, after every output is written.
 
+    The slicer's figures are printed and added to the report file. A missing
+    or failing slicer is one line and exit status 3 when ``required``; the
+    outputs already written stay.
+    """
+    from .io import write_json
+    from .slicer import SlicerError, find_prusa_slicer, slice_check
+
+    if not find_prusa_slicer():
+        message = "PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)"
+        if required:
+            click.echo(f"supportless: error: {message}; the other outputs are written", err=True)
+            sys.exit(EXIT_MISSING_TOOL)
+        console.print(message)
+        return None
     console.print("slicing rest and posed meshes with PrusaSlicer ...")
     up3 = np.append(rig.up, 0.0) if rig.dim == 2 else rig.up
-    report = slice_check((rig.vertices, rig.faces), (posed_vertices, rig.faces), up=up3, height_mm=height_mm)
-    return report.to_dict()
+    try:
+        sliced = slice_check((rig.vertices, rig.faces), (result.vertices, rig.faces), up=up3,
+                             height_mm=height_mm).to_dict()
+    except SlicerError as exc:
+        click.echo(f"supportless: error: slice check failed: {exc}; the other outputs are written", err=True)
+        sys.exit(EXIT_MISSING_TOOL)
+    red = sliced["reduction_percent"]
+    change = "no support before" if red is None else f"{red:.1f} % less"
+    console.print(f"PrusaSlicer support filament at {sliced['height_mm']:g} mm tall: "
+                  f"{sliced['before']['support_mm']:.0f} mm -> {sliced['after']['support_mm']:.0f} mm ({change})")
+    if report_path:
+        write_json(report_path, report | {"slice_check": sliced})
+        console.print(f"  report with the slicer's figures: {report_path}")
+    return sliced
 
 
 # --------------------------------------------------------------------------- #
@@ -319,10 +346,13 @@ def slice_check_cmd(original, posed, up, height_mm, as_json):
 @click.option("--quiet", "-q", is_flag=True)
 def demo(out_dir, figure, particles, iterations, seed, quiet):
     """Run the whole pipeline on a built-in figure and write its files."""
+    from .energies.overhang import risky_faces
     from .io import write_mesh, write_tgf
     from .render import render_mesh
+    from .report import build_report
     from .rig import load_rig
 
+    settings = _settings(particles=particles, iterations=iterations, seed=seed)
     console = _console()
     out = Path(out_dir)
     t0 = time.perf_counter()
@@ -333,29 +363,20 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"
     write_mesh(rest_mesh, rig.vertices, rig.faces)
     write_tgf(out / f"{figure}.tgf", rig.joints, rig.bones)
-    from .energies.overhang import risky_faces
-
+    risky = risky_faces(rig.vertices, rig.faces, rig.up, settings.overhang_angle) if rig.dim == 3 else None
     rest_png = render_mesh(out / f"{figure}-rest.png", rig.vertices, rig.faces, rig.up, rig.joints, rig.bones,
-                           risky=_risky_for_picture(rig, rig.vertices, risky_faces),
-                           title=f"{figure}: rest pose")
-    result = _run_search(rig, console, particles, iterations, seed, 30.0, 45.0, None, None, None, "prism", (), (),
-                         quiet)
-    from .slicer import find_prusa_slicer
-
-    slice_report = None
-    if rig.dim == 3 and find_prusa_slicer():
-        slice_report = _slice(rig, result.vertices, console)
-    _print_results(console, rig, result, slice_report, say_if_no_slicer=True)
+                           risky=risky, title=f"{figure}: rest pose")
+    result = _run_search(rig, console, settings, quiet)
+    report = build_report(rig, result)
+    _print_results(console, report)
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
     posed_ext = "stl" if rig.dim == 3 else "obj"
-    _write_outputs(rig, result, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
-                   out / f"{figure}-report.json", out, console, slice_report)
-
-
-def _risky_for_picture(rig, V, risky_faces):
-    mask = risky_faces(V, rig.faces, rig.up)
-    return mask if rig.dim == 3 else None
+    report_path = out / f"{figure}-report.json"
+    _write_outputs(rig, result, report, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
+                   report_path, out, console)
+    if rig.dim == 3:  # the slicer's figures when PrusaSlicer is there; the demo runs without it
+        _slice_and_report(rig, result, report, report_path, console, required=False)
 
 
 # --------------------------------------------------------------------------- #

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import supportless as sl
+from supportless.geometry import signed_volume
 
 
 @pytest.fixture(scope="module")
@@ -27,13 +28,51 @@ def test_terms_shapes_and_batch_equals_single(rig):
     np.testing.assert_allclose(values, singles, rtol=1e-10, atol=1e-14)
 
 
-def test_rest_pose_terms(rig):
+def test_rest_pose_has_no_distortion_and_no_intersection(rig):
     obj = sl.Objective(rig)
     t = obj.terms(rig.rest_angles())
     assert abs(float(t["arap"])) < 1e-10
-    assert np.isclose(float(t["overhang"]), 1.0)  # normalised by the rest value
     assert float(t["intersection"]) == 0.0
-    assert np.isclose(float(obj(rig.rest_angles())), obj.w_overhang)
+
+
+def test_terms_of_a_known_pose_are_the_energies_over_their_scales(rig):
+    """Each normalised term is its energy, computed on its own, over the rest volume or the rest support."""
+    obj = sl.Objective(rig, overhang_angle=50.0)
+    A = np.zeros((rig.bone_count, 3))
+    A[-1] = [0.1, 0.2, -0.3]
+    V, rest = rig.pose(A), rig.pose(rig.rest_angles())
+    volume = signed_volume(rig.vertices, rig.faces)
+    rest_support = sl.overhang_energy(rest, rig.faces, rig.up, 50.0)
+    t = obj.terms(A)
+    assert float(t["overhang"]) == pytest.approx(sl.overhang_energy(V, rig.faces, rig.up, 50.0) / rest_support,
+                                                 rel=1e-12)
+    assert float(t["intersection"]) == pytest.approx(
+        sl.self_intersection_volume(V, rig.faces, rig.up, obj.resolution) / volume, rel=1e-12, abs=1e-15)
+    assert float(t["arap"]) == pytest.approx(
+        float(sl.arap_energy(obj.arap_data, rig.transforms(A))) / volume, rel=1e-12)
+
+
+def test_support_scale_is_floored_for_a_model_that_needs_no_support(rig):
+    """An overhang threshold of 0 degrees counts no face as risky: the scale falls back to 1e-3 of the volume."""
+    obj = sl.Objective(rig, overhang_angle=0.0)
+    assert obj.rest_overhang == 0.0
+    assert obj.overhang_scale == pytest.approx(1e-3 * signed_volume(rig.vertices, rig.faces), rel=1e-12)
+
+
+def test_prism_and_column_differ_where_the_body_is_below_an_overhang(rig):
+    """The head folded over the arm: its prism reaches the plate, its column stops on the arm."""
+    A = np.zeros((1, rig.bone_count, 3))
+    A[0, 2] = [0.0, 0.0, -0.45 * np.pi]
+    V = rig.pose(A)
+    prism = sl.Objective(rig, overhang_model="prism")
+    column = sl.Objective(rig, overhang_model="column")
+    assert float(prism.overhang(V)[0]) == sl.overhang_energy(V[0], rig.faces, rig.up, 45.0)
+    assert float(column.overhang(V)[0]) == sl.support_volume(V[0], rig.faces, rig.up, 45.0, column.resolution)
+    grow_prism = float(prism.terms(A)["overhang"][0]) - 1.0
+    grow_column = float(column.terms(A)["overhang"][0]) - 1.0
+    assert grow_prism > 0.3  # the head's underside is far above the plate
+    assert abs(grow_column) < 0.05  # ... but just above the arm
+    np.testing.assert_array_equal(prism.terms(A)["arap"], column.terms(A)["arap"])
 
 
 def test_weighted_sum(rig):
@@ -66,9 +105,7 @@ def test_rigid_motion_of_the_whole_model_costs_no_distortion(rig):
     assert float(obj.terms(A)["arap"][0]) < 1e-9
 
 
-def test_column_model_option(rig):
-    obj = sl.Objective(rig, overhang_model="column")
-    assert np.isclose(float(obj.terms(rig.rest_angles())["overhang"]), 1.0)
+def test_unknown_overhang_model_is_refused(rig):
     with pytest.raises(ValueError):
         sl.Objective(rig, overhang_model="cone")
 

@@ -1,0 +1,49 @@
+"""The printing direction, enclosed volumes and placing on the plate."""
+
+import numpy as np
+import pytest
+
+from supportless.errors import InputError
+from supportless.geometry import parse_up, place_on_plate, signed_volume
+
+from meshes import box
+
+
+@pytest.mark.parametrize("up, expected", [("y", [0, 1, 0]), ("-z", [0, 0, -1]), ("X", [1, 0, 0]),
+                                          ("0,0,2", [0, 0, 1]), ("3 4 0", [0.6, 0.8, 0]), ((0, -5, 0), [0, -1, 0])])
+def test_parse_up(up, expected):
+    np.testing.assert_allclose(parse_up(up), expected, atol=1e-15)
+
+
+def test_parse_up_2d_and_errors():
+    np.testing.assert_array_equal(parse_up("y", dim=2), [0, 1])
+    np.testing.assert_array_equal(parse_up("1,0"), [1, 0, 0])  # two numbers: z = 0
+    for bad in ("w", "0,0,0", "1,nan,0", "1,2,3,4"):
+        with pytest.raises(InputError):
+            parse_up(bad)
+    with pytest.raises(InputError, match="plane"):
+        parse_up("z", dim=2)
+
+
+def test_signed_volume_of_a_box_and_its_mirror():
+    V, F = box((0, 0, 0), (1, 2, 3))
+    assert signed_volume(V, F) == pytest.approx(6.0, abs=1e-12)
+    assert signed_volume(V, F[:, ::-1]) == pytest.approx(-6.0, abs=1e-12)
+    # a translated box encloses the same volume
+    assert signed_volume(V + [5.0, -7.0, 2.0], F) == pytest.approx(6.0, abs=1e-12)
+
+
+def test_signed_area_of_a_planar_square():
+    V = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    assert signed_volume(V, F) == 4.0
+    assert signed_volume(V, F[:, ::-1]) == -4.0
+
+
+def test_place_on_plate_along_any_up():
+    V = np.array([[0.0, 2.0, 0.0], [1.0, 5.0, 1.0]])
+    np.testing.assert_allclose(place_on_plate(V, np.array([0.0, 1.0, 0.0]))[:, 1], [0.0, 3.0])
+    up = np.array([0.0, 0.0, -1.0])
+    out = place_on_plate(V, up)
+    assert (out @ up).min() == 0.0
+    np.testing.assert_array_equal(out[:, :2], V[:, :2])

@@ -1,0 +1,81 @@
+"""Reports: measures of a pose, the rest-vs-found report, and the pictures."""
+
+import json
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless import report as report_mod
+from supportless.energies.exact import intersecting_face_pairs
+from supportless.report import build_report, pose_measures, reduction, write_pictures
+from supportless.settings import SearchSettings
+
+
+@pytest.fixture(scope="module")
+def searched(branch_rig):
+    return sl.optimize(branch_rig, particles=10, iterations=4, seed=2, overhang_angle=40.0)
+
+
+def test_reduction():
+    assert reduction(200.0, 50.0) == 75.0
+    assert reduction(100.0, 120.0) == pytest.approx(-20.0)
+    assert reduction(0.0, 1.0) is None
+
+
+def test_pose_measures_are_the_energies_at_the_given_threshold(branch_rig):
+    rig = branch_rig
+    obj = SearchSettings().objective(rig)
+    angles = np.zeros((rig.bone_count, 3))
+    angles[-1] = [0.2, -0.1, 0.4]
+    V = rig.pose(angles)
+    m = pose_measures(obj, angles, overhang_angle=35.0)
+    assert m["overhang_angle"] == 35.0
+    assert m["overhang_prism"] == sl.overhang_energy(V, rig.faces, rig.up, 35.0)
+    assert m["support_column"] == sl.support_volume(V, rig.faces, rig.up, 35.0, obj.resolution)
+    assert m["risky_area"] == sl.risky_area(V, rig.faces, rig.up, 35.0)
+    assert m["self_intersection_volume"] == sl.self_intersection_volume(V, rig.faces, rig.up, obj.resolution)
+    assert m["objective"] == float(obj(angles))
+    assert m["intersecting_face_pairs"] == intersecting_face_pairs(V, rig.faces)
+    # the objective's own threshold by default; the caller's vertices are used as given
+    assert pose_measures(obj, angles, exact=False)["overhang_angle"] == obj.overhang_angle
+    assert "intersecting_face_pairs" not in pose_measures(obj, angles, exact=False)
+    assert pose_measures(obj, angles, exact=False, vertices=V) == pose_measures(obj, angles, exact=False)
+
+
+def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(branch_rig, searched):
+    rig = branch_rig
+    rep = build_report(rig, searched)
+    json.dumps(rep)  # JSON-ready
+    assert rep["before"]["overhang_angle"] == rep["after"]["overhang_angle"] == 40.0
+    rest = rig.pose(rig.rest_angles())  # linear blend skinning at rest: the rest surface to the last bits
+    assert rep["before"]["overhang_prism"] == sl.overhang_energy(rest, rig.faces, rig.up, 40.0)
+    assert rep["after"]["overhang_prism"] == sl.overhang_energy(rig.pose(searched.angles), rig.faces, rig.up, 40.0)
+    assert rep["reduction_percent"]["overhang_prism"] == reduction(rep["before"]["overhang_prism"],
+                                                                   rep["after"]["overhang_prism"])
+    assert rep["after"]["objective"] == pytest.approx(searched.value, rel=1e-12)
+    assert rep["settings"]["overhang_angle"] == 40.0 and rep["settings"]["search_overhang_angle"] == 50.0
+    assert rep["settings"]["fixed_bones"] == [int(b) + 1 for b in np.flatnonzero(searched.fixed)]
+    assert SearchSettings.from_dict(rep["settings"]) == searched.settings
+    assert rep["history"] == [float(v) for v in searched.history]
+    assert rep["after"]["intersecting_face_pairs"] == 0
+    moved = np.linalg.norm(rig.pose(searched.angles) - rig.vertices, axis=1).max()
+    assert rep["max_vertex_displacement"] == moved
+    assert rep["runtime_seconds"] == searched.runtime_seconds
+
+
+def test_pictures_colour_faces_past_the_printers_threshold(branch_rig, searched, tmp_path, monkeypatch):
+    seen = {}
+    original = report_mod.render_before_after
+
+    def spy(path, before, after, up, **kw):
+        seen.update(kw)
+        return original(path, before, after, up, **kw)
+
+    monkeypatch.setattr(report_mod, "render_before_after", spy)
+    written = write_pictures(tmp_path, branch_rig, searched, build_report(branch_rig, searched))
+    assert [label for label, _ in written] == ["before/after picture", "convergence plot"]
+    rest = sl.geometry.place_on_plate(branch_rig.vertices, branch_rig.up)
+    expected = sl.risky_faces(rest, branch_rig.faces, branch_rig.up, 40.0)
+    np.testing.assert_array_equal(seen["before_risky"], expected)
+    assert "> 40 deg" in seen["suptitle"]

@@ -1,0 +1,89 @@
+"""SearchSettings: one source of the search's defaults; which bones the search rotates."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless.objective import W_ARAP, W_INTERSECT, W_OVERHANG
+from supportless.settings import SearchSettings, angle_layout, plate_bones, resolve_fixed_bones
+
+
+def test_defaults_and_frozen():
+    s = SearchSettings()
+    assert (s.particles, s.iterations, s.seed, s.max_angle) == (200, 120, 0, 30.0)
+    assert (s.w_arap, s.w_overhang, s.w_intersect) == (W_ARAP, W_OVERHANG, W_INTERSECT)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        s.particles = 3
+
+
+def test_bone_lists_accept_commas_repeats_and_strings():
+    assert SearchSettings(fix=("3,4", "7")).fix == ("3", "4", "7")
+    assert SearchSettings(free="all").free == ("all",)
+    assert SearchSettings(fix=[2, 5]).fix == ("2", "5")
+
+
+@pytest.mark.parametrize("bad", [dict(overhang_model="cone"), dict(preset="fast"), dict(particles=0),
+                                 dict(overhang_angle=95.0)])
+def test_bad_settings_are_refused(bad):
+    with pytest.raises(ValueError):
+        SearchSettings(**bad)
+
+
+def test_replace_ignores_none_and_round_trips_through_dict():
+    s = SearchSettings(particles=7, fix=("2",))
+    assert s.replace(particles=None, seed=4) == SearchSettings(particles=7, fix=("2",), seed=4)
+    d = s.to_dict()
+    assert d["search_overhang_angle"] == 55.0 and d["fix"] == ["2"]
+    assert SearchSettings.from_dict(d) == s
+
+
+def test_objective_is_built_from_the_settings_and_shares_operators(branch_rig):
+    s = SearchSettings(w_arap=3.0, overhang_angle=40.0, overhang_margin=7.0, overhang_model="column")
+    obj = s.objective(branch_rig)
+    assert (obj.w_arap, obj.overhang_angle, obj.overhang_model) == (3.0, 47.0, "column")
+    again = s.replace(w_overhang=2.0).objective(branch_rig, arap_data=obj.arap_data)
+    assert again.arap_data is obj.arap_data
+    A = np.random.default_rng(0).uniform(-0.4, 0.4, (3, branch_rig.bone_count, 3))
+    t1, t2 = obj.terms(A), again.terms(A)
+    np.testing.assert_array_equal(t1["arap"], t2["arap"])
+    np.testing.assert_array_equal(again(A), 3.0 * t2["arap"] + 2.0 * t2["overhang"] + W_INTERSECT * t2["intersection"])
+
+
+def test_plate_bones_fixed_by_default(branch_rig):
+    rig = branch_rig
+    fixed = resolve_fixed_bones(rig)
+    touching = plate_bones(rig)
+    assert touching.any()
+    # every fixed-by-default bone touches the plate or is an ancestor of one that does
+    for b in np.flatnonzero(fixed):
+        assert touching[b] or any(touching[c] for c in range(rig.bone_count) if b in _ancestors(rig.parents, c))
+    assert not fixed.all()
+    np.testing.assert_array_equal(SearchSettings().fixed_bones(rig), fixed)
+    assert not resolve_fixed_bones(rig, free=["all"]).any()
+    assert resolve_fixed_bones(rig, fix=[str(rig.bone_count)])[-1]
+    with pytest.raises(ValueError, match="out of range"):
+        resolve_fixed_bones(rig, fix=["99"])
+    with pytest.raises(ValueError, match="not a bone number"):
+        resolve_fixed_bones(rig, fix=["arm"])
+
+
+def _ancestors(parents, b):
+    out, p = [], parents[b]
+    while p >= 0:
+        out.append(p)
+        p = parents[p]
+    return out
+
+
+def test_angle_layout_three_angles_in_3d_one_in_2d(branch_rig):
+    fixed = np.zeros(branch_rig.bone_count, bool)
+    fixed[0] = True
+    free = angle_layout(branch_rig, fixed)
+    assert free.shape == (branch_rig.bone_count, 3)
+    assert not free[0].any() and free[1:].all()
+    V, F, J, B = sl.demo_figure("woody2d")
+    rig2 = sl.prepare_rig(V, F, J, B, up="y")
+    free2 = angle_layout(rig2, np.zeros(rig2.bone_count, bool))
+    assert free2[:, 2].all() and not free2[:, :2].any()
