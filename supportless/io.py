@@ -5,7 +5,8 @@ libigl's TGF; precomputed volume meshes and weights are libigl's ``.mesh`` and
 ``.dmat``; poses are JSON. Every writer writes a temporary file next to the
 target and renames it, so an interrupted write never leaves a half-written file.
 Every reader raises :class:`~supportless.errors.InputError` with one clear line
-on bad input.
+on bad input, and :func:`write_mesh` does the same for arrays that are not a
+triangle mesh, before it writes anything.
 """
 
 from __future__ import annotations
@@ -19,6 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+
+__all__ = [
+    "MESH_FORMATS", "POSE_FORMAT", "atomic_path", "check_closed_surface", "check_mesh_arrays", "edge_counts",
+    "merge_duplicate_vertices", "read_dmat", "read_mesh", "read_pose", "read_tet_mesh", "read_tgf", "write_dmat",
+    "write_json", "write_mesh", "write_pose", "write_tet_mesh", "write_text", "write_tgf",
+]
 
 MESH_FORMATS = ("obj", "stl", "ply", "off", "3mf", "glb")
 
@@ -215,6 +222,57 @@ def check_closed_surface(V: np.ndarray, F: np.ndarray, path=None) -> None:
         raise InputError(path, "surface is not consistently oriented: some neighbouring faces have opposite winding")
 
 
+def check_mesh_arrays(V, F, path: str | os.PathLike | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Check that ``(V, F)`` is a triangle mesh and return it as float64 / int64 arrays.
+
+    Parameters
+    ----------
+    V : (n, 3) or (n, 2) array_like of float
+        Vertex positions; all finite.
+    F : (f, 3) array_like of int
+        Triangles, 0-based indices into ``V`` (integer-valued floats are accepted).
+    path : str or os.PathLike, optional
+        The file the mesh is for, named in the error message.
+
+    Returns
+    -------
+    V : (n, 3) or (n, 2) float64
+    F : (f, 3) int64
+
+    Raises
+    ------
+    InputError
+        With one line saying what is wrong: shapes, non-finite vertices,
+        non-integer, negative or out-of-range face indices.
+    """
+    try:
+        V = np.asarray(V, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputError(path, "vertices must be an (n, 3) array of numbers") from None
+    try:
+        F = np.asarray(F)
+    except ValueError:  # ragged nested lists
+        raise InputError(path, "faces must be an (f, 3) array of vertex indices") from None
+    if V.ndim != 2 or V.shape[1] not in (2, 3) or len(V) == 0:
+        raise InputError(path, f"vertices must be an (n, 3) or (n, 2) array, got shape {V.shape}")
+    bad = np.flatnonzero(~np.isfinite(V).all(axis=1))
+    if len(bad):
+        raise InputError(path, f"vertex {bad[0]} has a NaN or infinite coordinate ({len(bad)} such vertices)")
+    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0:
+        raise InputError(path, f"faces must be an (f, 3) array of vertex indices, got shape {F.shape}")
+    if F.dtype.kind == "f" and np.all(np.isfinite(F)) and np.all(F == np.round(F)):
+        F = F.astype(np.int64)
+    if F.dtype.kind not in "iu":
+        raise InputError(path, f"face indices must be integers, got {F.dtype}")
+    F = F.astype(np.int64, copy=False)
+    bad = np.flatnonzero(((F < 0) | (F >= len(V))).any(axis=1))
+    if len(bad):
+        f = bad[0]
+        raise InputError(path, f"face {f} ({' '.join(map(str, F[f]))}) refers to a vertex out of range "
+                               f"0..{len(V) - 1} ({len(bad)} such faces)")
+    return V, F
+
+
 def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
     """Write a triangle mesh atomically, in the format the extension names.
 
@@ -225,6 +283,12 @@ def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
     V : (n, 3) or (n, 2) float64
         Planar vertices are written with z = 0.
     F : (f, 3) int64
+
+    Raises
+    ------
+    InputError
+        For an unknown extension or arrays that are not a triangle mesh (see
+        :func:`check_mesh_arrays`); nothing is written then.
     """
     import trimesh
 
@@ -232,10 +296,10 @@ def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
     ext = path.suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
-    V = np.asarray(V, dtype=np.float64)
+    V, F = check_mesh_arrays(V, F, path)
     if V.shape[1] == 2:
         V = np.column_stack([V, np.zeros(len(V))])
-    mesh = trimesh.Trimesh(V, np.asarray(F, dtype=np.int64), process=False)
+    mesh = trimesh.Trimesh(V, F, process=False)
     with atomic_path(path) as tmp:
         mesh.export(str(tmp), file_type=ext)
 

@@ -157,11 +157,54 @@ def test_failed_write_keeps_the_previous_file(tmp_path, monkeypatch, branch_mesh
     assert [p.name for p in tmp_path.iterdir()] == ["out.ply"]
 
 
-def test_bad_faces_leave_no_file(tmp_path, branch_mesh):
+_TRI = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+@pytest.mark.parametrize("V, F, fragment", [
+    (_TRI, [[0, 1, 3]], "face 0 (0 1 3) refers to a vertex out of range 0..2 (1 such faces)"),
+    (_TRI, [[0, 1, 2], [0, -1, 2], [2, 1, -3]], "face 1 (0 -1 2) refers to a vertex out of range 0..2 (2 such"),
+    (_TRI, [0, 1, 2], "faces must be an (f, 3) array of vertex indices, got shape (3,)"),
+    (_TRI, [[0, 1, 2, 0]], "faces must be an (f, 3) array of vertex indices, got shape (1, 4)"),
+    (_TRI, np.zeros((0, 3), np.int64), "got shape (0, 3)"),
+    (_TRI, [[0, 1, 2], [0, 1]], "faces must be an (f, 3) array of vertex indices"),
+    (_TRI, [[0, 1, 2.5]], "face indices must be integers, got float64"),
+    (_TRI, [["a", "b", "c"]], "face indices must be integers"),
+    (_TRI[:, 0], [[0, 1, 2]], "vertices must be an (n, 3) or (n, 2) array, got shape (3,)"),
+    (np.zeros((3, 4)), [[0, 1, 2]], "got shape (3, 4)"),
+    (np.zeros((0, 3)), [[0, 1, 2]], "got shape (0, 3)"),
+    (_TRI * [1, 1, np.nan], [[0, 1, 2]], "vertex 0 has a NaN or infinite coordinate (3 such vertices)"),
+    (_TRI + [[0, 0, 0], [0, np.inf, 0], [0, 0, 0]], [[0, 1, 2]], "vertex 1 has a NaN or infinite coordinate"),
+    ([["x", 0, 0]] * 3, [[0, 1, 2]], "vertices must be an (n, 3) array of numbers"),
+])
+def test_write_mesh_rejects_bad_arrays_before_writing(tmp_path, V, F, fragment):
+    target = tmp_path / "sub" / "out.stl"
+    with pytest.raises(sl.InputError) as info:
+        sl.write_mesh(target, V, F)
+    message = str(info.value)
+    assert message.startswith(f"{target}: ") and "\n" not in message
+    assert fragment in message
+    assert info.value.path == str(target)
+    assert list(tmp_path.iterdir()) == []  # not even the folder
+
+
+def test_bad_faces_leave_the_previous_file(tmp_path, branch_mesh):
     V, F = branch_mesh
-    with pytest.raises(Exception):
-        sl.write_mesh(tmp_path / "out.stl", V, F + len(V))
-    assert list(tmp_path.iterdir()) == []
+    path = tmp_path / "out.stl"
+    sl.write_mesh(path, V, F)
+    before = path.read_bytes()
+    with pytest.raises(sl.InputError, match="refers to a vertex out of range"):
+        sl.write_mesh(path, V, F + len(V))
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out.stl"]
+
+
+def test_check_mesh_arrays_converts_and_keeps_2d():
+    V, F = io.check_mesh_arrays([[0, 0], [1, 0], [0, 1]], [[0.0, 1.0, 2.0]])
+    assert V.dtype == np.float64 and V.shape == (3, 2)
+    assert F.dtype == np.int64 and F.tolist() == [[0, 1, 2]]
+    with pytest.raises(sl.InputError) as info:
+        io.check_mesh_arrays(_TRI, [[0, 1, 7]])
+    assert info.value.path is None and str(info.value).startswith("face 0 (0 1 7)")
 
 
 def test_atomic_path_creates_the_folder(tmp_path):
