@@ -133,6 +133,99 @@ def test_demo_2d(tmp_path):
     assert report["dimension"] == 2
 
 
+def test_demo_3d_writes_every_file(tmp_path, prusa_slicer):
+    """The README's first command, on a small swarm: mesh, skeleton, pose, report, pictures, slicer figures."""
+    out = tmp_path / "demo"
+    result = run("demo", "--out", out, "--particles", 8, "--iterations", 3, "-q",
+                 env={"SUPPORTLESS_CACHE": str(tmp_path / "cache")})
+    assert result.exit_code == 0, (result.output, result.exception)
+    names = {p.name for p in out.iterdir()}
+    assert {"tpose-rest.stl", "tpose.tgf", "tpose-rest.png", "tpose-posed.stl", "tpose-pose.json",
+            "tpose-report.json", "before_after.png", "convergence.png"} <= names
+    report = json.loads((out / "tpose-report.json").read_text())
+    assert report["dimension"] == 3 and report["after"]["intersecting_face_pairs"] == 0
+    assert report["settings"]["particles"] == 8
+    assert report["slice_check"]["before"]["support_mm"] > 0
+    assert "PrusaSlicer support filament" in result.stdout
+    V, _ = sl.read_mesh(out / "tpose-posed.stl")
+    assert V[:, 1].min() == pytest.approx(0.0, abs=1e-6)
+
+
+def test_slice_check_without_the_slicer_keeps_every_output(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
+                 "--iterations", 1, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
+                 "--report", tmp_path / "report.json", "--slice-check",
+                 env={"SUPPORTLESS_PRUSA_SLICER": str(tmp_path / "no-such-slicer")})
+    assert result.exit_code == 3, (result.output, result.exception)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "PrusaSlicer not found" in lines[0] and "apt-get install prusa-slicer" in lines[0]
+    assert "Traceback" not in result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pose.json", "posed.stl", "report.json"]
+    assert "slice_check" not in json.loads((tmp_path / "report.json").read_text())
+
+
+def test_ctrl_c_during_the_search_writes_the_best_pose(branch_files, tmp_path, monkeypatch):
+    """A KeyboardInterrupt in the third swarm evaluation: the best pose so far is still written."""
+    from supportless.objective import Objective
+
+    calls = {"n": 0}
+    bounded = Objective.bounded
+
+    def interrupt_on_third_call(self, angles, bound):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return bounded(self, angles, bound)
+
+    monkeypatch.setattr(Objective, "bounded", interrupt_on_third_call)
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
+                 "--iterations", 50, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
+                 "--report", tmp_path / "report.json")
+    assert result.exit_code == 0, (result.output, result.exception)
+    assert "stopped early" in result.stdout
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["interrupted"] is True and len(report["history"]) == 2  # initial swarm + one iteration
+    assert sl.read_pose(tmp_path / "pose.json", branch_files["bones"]).shape == (3, 3)
+    assert (tmp_path / "posed.stl").stat().st_size > 0
+
+
+def test_search_options_reach_the_search(branch_files, tmp_path):
+    """--overhang-model, --free all and the weights end up in the report's settings and change the search."""
+    base = ("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
+            "--iterations", 2, "-q", "-o", tmp_path / "posed.stl")
+    result = run(*base, "--overhang-model", "column", "--free", "all", "--w-arap", "3",
+                 "--report", tmp_path / "column.json")
+    assert result.exit_code == 0, (result.output, result.exception)
+    settings = json.loads((tmp_path / "column.json").read_text())["settings"]
+    assert settings["overhang_model"] == "column" and settings["free"] == ["all"] and settings["w_arap"] == 3.0
+    assert settings["fixed_bones"] == []
+    default = run(*base, "--report", tmp_path / "default.json")
+    settings = json.loads((tmp_path / "default.json").read_text())["settings"]
+    assert settings["overhang_model"] == "prism" and settings["fixed_bones"] != []
+
+
+def test_precomputed_tets_and_weights(branch_files, branch_rig, tmp_path):
+    from supportless.io import write_dmat, write_tet_mesh
+
+    write_tet_mesh(tmp_path / "b.mesh", branch_rig.tet_vertices, branch_rig.tets)
+    W = branch_rig.tet_weights.copy()
+    W[:, 0], W[:, 1:] = 1.0, 0.0  # every vertex follows the first bone: a visibly different rig
+    write_dmat(tmp_path / "b.dmat", W)
+    result = run("prepare", branch_files["mesh"], "--no-cache", "--tets", tmp_path / "b.mesh",
+                 "--weights", tmp_path / "b.dmat")
+    assert result.exit_code == 0, (result.output, result.exception)
+    assert f"{len(branch_rig.tets)} tets" in result.stdout
+    angles = np.zeros((3, 3))
+    angles[1] = [0.0, 0.0, 0.6]
+    sl.write_pose(tmp_path / "pose.json", angles, branch_files["bones"])
+    result = run("apply", branch_files["mesh"], "--no-cache", "--tets", tmp_path / "b.mesh", "--weights",
+                 tmp_path / "b.dmat", "--pose", tmp_path / "pose.json", "-o", tmp_path / "posed.stl")
+    assert result.exit_code == 0, (result.output, result.exception)
+    V, _ = sl.read_mesh(tmp_path / "posed.stl")
+    surface = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])  # same file, same vertex order
+    np.testing.assert_allclose(V, place_on_plate(surface.vertices, surface.up), atol=1e-4)  # nothing follows bone 2
+
+
 # ----------------------------------------------------------------------- errors
 
 
@@ -143,7 +236,7 @@ def test_bad_input_is_one_line_and_exit_2(bad_case):
         if option in kwargs:
             args += [f"--{option}", kwargs[option]]
     line = assert_user_error(run(*args), str(culprit), *fragments)
-    assert line == f"supportless: error: {line.split('supportless: error: ', 1)[1]}"
+    assert line.startswith(f"supportless: error: {culprit}: "), line  # the file at fault comes first
 
 
 def test_optimize_with_a_bad_output_extension_writes_nothing(branch_files, tmp_path):

@@ -1,0 +1,154 @@
+"""The package's structure: data flows one way, and the licence-sensitive calls stay in one place each.
+
+Imports are read from the source with :mod:`ast` — module-level and inside
+functions alike — so an import hidden in a function cannot close a cycle.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "supportless"
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def imported_modules(name: str, path: Path, known: set[str]) -> set[str]:
+    """Modules of the package that ``name`` imports anywhere in its source."""
+    package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                root = ".".join(base + ([node.module] if node.module else []))
+            else:
+                root = node.module or ""
+            # "from . import io" names a submodule; "from .io import read_mesh" a module
+            targets = [f"{root}.{alias.name}" if f"{root}.{alias.name}" in known else root for alias in node.names]
+        else:
+            continue
+        for target in targets:
+            while target and target not in known:  # "supportless.energies.arap.x" -> the module that holds x
+                target = target.rpartition(".")[0]
+            if target and target != name:
+                found.add(target)
+    return found
+
+
+def import_graph() -> nx.DiGraph:
+    mods = modules()
+    graph = nx.DiGraph()
+    graph.add_nodes_from(mods)
+    for name, path in mods.items():
+        for target in imported_modules(name, path, set(mods)):
+            graph.add_edge(name, target)
+    return graph
+
+
+def test_the_graph_reader_sees_function_level_and_relative_imports(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("def f():\n    from .sub import b\n    from . import c\n")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "sub" / "b.py").write_text("from ..c import thing\n")
+    (pkg / "c.py").write_text("import pkg.a\n")
+    known = {"pkg", "pkg.a", "pkg.sub", "pkg.sub.b", "pkg.c"}
+    assert imported_modules("pkg.a", pkg / "a.py", known) == {"pkg.sub.b", "pkg.c"}
+    assert imported_modules("pkg.sub.b", pkg / "sub" / "b.py", known) == {"pkg.c"}
+    assert imported_modules("pkg.c", pkg / "c.py", known) == {"pkg.a"}
+
+
+def test_package_imports_form_a_dag():
+    graph = import_graph()
+    graph.remove_node("supportless")  # the package's front door imports its modules; none imports it
+    cycles = list(nx.simple_cycles(graph))
+    assert not cycles, f"import cycles: {cycles}"
+
+
+def test_no_module_imports_the_package_front_door():
+    graph = import_graph()
+    assert list(graph.predecessors("supportless")) == []
+
+
+# each layer may import only layers listed before it (data flows rig -> energies -> ... -> cli/ui)
+LAYERS = [
+    {"supportless.errors", "supportless.geometry"},
+    {"supportless.io", "supportless.kinematics", "supportless.tetmesh", "supportless.shapes"},
+    {"supportless.rig", "supportless.energies"},
+    {"supportless.objective"},
+    {"supportless.settings"},
+    {"supportless.search"},
+    {"supportless.render", "supportless.report"},
+    {"supportless.slicer", "supportless.bench"},
+    {"supportless.cli", "supportless.ui"},
+]
+
+
+def layer_of(name: str) -> int:
+    for i, layer in enumerate(LAYERS):
+        if any(name == m or name.startswith(m + ".") for m in layer):
+            return i
+    raise AssertionError(f"{name} is in no layer of this test: add it where it belongs")
+
+
+@pytest.mark.parametrize("name", sorted(set(modules()) - {"supportless"}))
+def test_imports_point_down_the_layers(name):
+    graph = import_graph()
+    for target in graph.successors(name):
+        assert layer_of(target) <= layer_of(name), f"{name} imports {target}, a later stage"
+
+
+def test_energies_are_arrays_in_arrays_out():
+    """The energies import nothing of the package but each other and the shared geometry."""
+    graph = import_graph()
+    for name in graph:
+        if name.startswith("supportless.energies"):
+            for target in graph.successors(name):
+                assert target.startswith("supportless.energies") or target in ("supportless.geometry",
+                                                                                 "supportless.errors"), (name, target)
+
+
+def external_imports(path: Path) -> set[str]:
+    """Absolute module names ``path`` imports (``import a.b`` and ``from a.b import c`` give ``a.b``)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            names.add(node.module)
+            names |= {f"{node.module}.{alias.name}" for alias in node.names}
+    return names
+
+
+def test_licence_sensitive_calls_stay_in_one_module_each():
+    """TetGen (AGPL) and Triangle (non-commercial) only in tetmesh.py; CGAL (GPL) only in energies/exact.py."""
+    where = {"igl.copyleft.tetgen": set(), "igl.triangle": set(), "igl.copyleft.cgal": set()}
+    for name, path in modules().items():
+        imported = external_imports(path)
+        for key in where:
+            if key in imported:
+                where[key].add(name)
+    assert where == {"igl.copyleft.tetgen": {"supportless.tetmesh"}, "igl.triangle": {"supportless.tetmesh"},
+                     "igl.copyleft.cgal": {"supportless.energies.exact"}}
+
+
+def test_no_module_is_a_room_of_many_ideas():
+    """No module over 700 lines: split one that grows past it."""
+    long = {name: n for name, path in modules().items() if (n := len(path.read_text().splitlines())) > 700}
+    assert not long, long
