@@ -22,7 +22,6 @@ import numpy as np
 import supportless as sl
 from supportless.energies.arap import arap_energy
 from supportless.kinematics import skin
-from supportless.objective import Objective
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
@@ -38,7 +37,7 @@ def best_of(fn, repeat):
 
 
 def bench(name, rig, poses, repeat, backend):
-    obj = Objective(rig, backend=backend)
+    obj = sl.SearchSettings(backend=backend).objective(rig)  # what the search minimises
     data = obj.arap_data
     A = np.random.default_rng(0).uniform(-1, 1, (poses, rig.bone_count, 3)) * np.radians(30)
     T = rig.transforms(A)

@@ -27,7 +27,7 @@ import numpy as np
 
 import supportless as sl
 from supportless.energies.overhang import projected_risky_area
-from supportless.report import intersecting_face_pairs
+from supportless.energies.exact import intersecting_face_pairs
 from supportless.slicer import find_prusa_slicer, slice_check
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

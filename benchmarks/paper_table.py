@@ -23,6 +23,7 @@ import time
 from pathlib import Path
 
 import supportless as sl
+from supportless.report import build_report, write_pictures
 from supportless.slicer import find_prusa_slicer, slice_check
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,12 +39,14 @@ def load(name: str):
 def run(name: str, args) -> dict:
     rig = load(name)
     t0 = time.perf_counter()
-    res = sl.optimize(rig, particles=args.particles, iterations=args.iterations, seed=args.seed,
-                      w_arap=args.w_arap, w_overhang=args.w_overhang, w_intersect=args.w_intersect,
-                      overhang_model=args.overhang_model, free=args.free,
-                      overhang_angle=args.overhang_angle, overhang_margin=args.overhang_margin, fix=args.fix, max_angle=args.max_angle)
+    settings = sl.SearchSettings().replace(
+        particles=args.particles, iterations=args.iterations, seed=args.seed, w_arap=args.w_arap,
+        w_overhang=args.w_overhang, w_intersect=args.w_intersect, overhang_model=args.overhang_model,
+        free=args.free, fix=args.fix, overhang_angle=args.overhang_angle, overhang_margin=args.overhang_margin,
+        max_angle=args.max_angle)
+    res = sl.optimize(rig, settings)
     runtime = time.perf_counter() - t0
-    rep = res.report
+    rep = build_report(rig, res)
     row = {"model": name, "runtime_s": runtime, "report": rep}
     if find_prusa_slicer() and rig.dim == 3:
         sc = slice_check((rig.vertices, rig.faces), (res.vertices, rig.faces), up=rig.up, height_mm=60.0)
@@ -53,9 +56,7 @@ def run(name: str, args) -> dict:
         out.mkdir(parents=True, exist_ok=True)
         sl.write_mesh(out / f"{name}-posed.stl", res.vertices, rig.faces)
         (out / f"{name}-report.json").write_text(json.dumps(rep, indent=1))
-        from supportless.report import write_pictures
-
-        write_pictures(out / name, rig, res)
+        write_pictures(out / name, rig, res, rep)
     return row
 
 
@@ -83,18 +84,19 @@ def table(rows: list[dict], args) -> str:
 
 
 def main(argv=None):
+    # every option left out takes the tool's default (supportless.SearchSettings)
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="+", default=["bunny", "bb-bunny", "tpose", "branch"])
-    p.add_argument("--particles", type=int, default=200)
-    p.add_argument("--iterations", type=int, default=120)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--max-angle", type=float, default=30.0)
+    p.add_argument("--particles", type=int, default=None)
+    p.add_argument("--iterations", type=int, default=None)
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--max-angle", type=float, default=None)
     p.add_argument("--w-arap", type=float, default=None)
     p.add_argument("--w-overhang", type=float, default=None)
     p.add_argument("--w-intersect", type=float, default=None)
-    p.add_argument("--overhang-model", default="prism", choices=["prism", "column"])
-    p.add_argument("--overhang-angle", type=float, default=45.0)
-    p.add_argument("--overhang-margin", type=float, default=10.0)
+    p.add_argument("--overhang-model", default=None, choices=["prism", "column"])
+    p.add_argument("--overhang-angle", type=float, default=None)
+    p.add_argument("--overhang-margin", type=float, default=None)
     p.add_argument("--free", nargs="*", default=None)
     p.add_argument("--fix", nargs="*", default=None)
     p.add_argument("--out", default=None, help="Write the Markdown table here (default: print only).")
