@@ -29,6 +29,8 @@ from typing import Callable
 
 import numpy as np
 
+__all__ = ["bench_model", "default_models", "random_poses", "run_bench", "timed_search"]
+
 #: Folder of the shared test models (``../shared/data`` beside the repository
 #: root, which is ``parents[1]`` of this file).
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -16,6 +16,8 @@ import numpy as np
 
 from .errors import InputError, SupportlessError
 
+__all__ = ["main"]
+
 EXIT_USER_ERROR = 2
 #: Exit status when a tool the command needs (PrusaSlicer) is missing or fails.
 EXIT_MISSING_TOOL = 3

@@ -29,6 +29,8 @@ from .kinematics import skin
 from .geometry import signed_volume
 from .rig import Rig
 
+__all__ = ["OVERHANG_MODELS", "Objective", "W_ARAP", "W_INTERSECT", "W_OVERHANG"]
+
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
 W_OVERHANG = 1.0

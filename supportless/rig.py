@@ -28,6 +28,8 @@ from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 
+__all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
+
 #: Bump when the cached content or the way it is computed changes.
 CACHE_VERSION = 2
 

@@ -15,6 +15,8 @@ import numpy as np
 
 from .errors import InputError
 
+__all__ = ["bone_samples", "refine_triangulation_with_points", "tetrahedralize_with_skeleton", "triangulate_planar"]
+
 #: TetGen switches: p = piecewise linear complex, q2 = quality bound, Y = keep
 #: the surface unchanged (so surface vertices are the first rows), Q = quiet.
 TETGEN_FLAGS = "pq2YQ"
