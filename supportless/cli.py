@@ -41,8 +41,11 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
         if not quiet:
             click.echo(f"  {msg} ...", err=True)
 
-    return load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
-                    progress=progress)
+    rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
+                   progress=progress)
+    for warning in rig.info.get("warnings", []):
+        click.echo(f"supportless: warning: {rig.name}: {warning}", err=True)
+    return rig
 
 
 def rig_options(f):

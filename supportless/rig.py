@@ -31,7 +31,17 @@ from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_te
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 2
+CACHE_VERSION = 3
+
+#: A joint outside the surface by at most this fraction of the model's height is
+#: moved inside (:func:`pull_joints_inside`); farther out is an error. Real tips
+#: (fingers, toes, the top of the head, a root joint on the floor) lie within
+#: about 1 % of the skin; 3 % leaves room for coarse rigs while a skeleton in
+#: other units or of another model is still refused.
+JOINT_OUTSIDE_TOLERANCE = 0.03
+
+#: How deep inside a moved joint is put, as a fraction of the model's height.
+JOINT_INSIDE_MARGIN = 0.005
 
 #: Default settings of the weight computation.
 SAMPLES_PER_BONE = 10
@@ -158,8 +168,8 @@ def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
     return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
 
 
-def _check_inputs(V, F, joints, bones, mesh_path=None, skel_path=None):
-    """Validate and normalise arrays; returns (V, F, joints, dim)."""
+def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None):
+    """Validate and normalise arrays; returns (V, F, joints, dim, warnings)."""
     if len(bones) == 0:
         raise InputError(skel_path, "skeleton has no bones")
     if len(F) == 0 or len(V) == 0:
@@ -179,20 +189,90 @@ def _check_inputs(V, F, joints, bones, mesh_path=None, skel_path=None):
             i = int(np.flatnonzero(~inside)[0])
             raise InputError(skel_path, f"joint {i + 1} at {J2[i].tolist()} lies outside the planar mesh "
                              f"{mesh_path or ''}".rstrip() + "; move it inside")
-        return np.ascontiguousarray(V2), F, np.ascontiguousarray(J2), 2
+        return np.ascontiguousarray(V2), F, np.ascontiguousarray(J2), 2, []
     check_closed_surface(V, F, mesh_path)
     if signed_volume(V, F) < 0:
         F = F[:, ::-1].copy()
+    joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
+    return V, F, joints, 3, warnings
+
+
+def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,
+                       path=None) -> tuple[np.ndarray, list[str]]:
+    """Move joints that lie just outside a closed surface inside it, along one of their bones.
+
+    Real skeletons put tips (fingertips, toe tips, the top of the head, a root
+    joint on the floor) on or just outside the skin. A joint outside by at most
+    :data:`JOINT_OUTSIDE_TOLERANCE` of the model's height is moved along the
+    bone towards its deepest neighbouring joint, to the first point that lies
+    :data:`JOINT_INSIDE_MARGIN` of the height inside (or, on a part thinner
+    than that, to the deepest point of the bone's first half). Farther outside
+    is an error: such a skeleton belongs to another model or other units.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Closed, outward-oriented surface.
+    F : (f, 3) int64
+    joints : (j, 3) float64
+    bones : (m, 2) int64
+    up : str or (3,) float
+        Printing direction (the height is measured along it).
+    path : str or os.PathLike, optional
+        The skeleton file, named in errors.
+
+    Returns
+    -------
+    joints : (j, 3) float64
+        A copy with the moved joints.
+    warnings : list of str
+        One line per moved joint: which joint, how far outside it was, where it went.
+
+    Raises
+    ------
+    InputError
+        A joint farther outside than the tolerance, or one that cannot be
+        moved inside along any of its bones.
+    """
     import igl
 
-    wn = np.asarray(igl.winding_number(V, F, joints))
-    outside = np.flatnonzero(np.abs(wn) < 0.5)
-    if len(outside):
-        i = int(outside[0])
-        raise InputError(skel_path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies outside the surface"
-                         f"{' ' + str(mesh_path) if mesh_path else ''} ({len(outside)} joints outside); "
+    joints = np.array(joints, np.float64)
+    height = float(np.ptp(V @ parse_up(up)))
+    if height <= 0:
+        height = float(np.ptp(V, axis=0).max())
+    depth = -np.asarray(igl.signed_distance(joints, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
+    outside = np.flatnonzero(depth < 0)
+    far = outside[-depth[outside] > JOINT_OUTSIDE_TOLERANCE * height]
+    if len(far):
+        i = int(far[np.argmin(depth[far])])
+        raise InputError(path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies "
+                         f"{100 * -depth[i] / height:.1f} % of the model's height outside the surface "
+                         f"({len(far)} joints farther out than {100 * JOINT_OUTSIDE_TOLERANCE:g} %); "
                          "check the skeleton belongs to this model and uses the same units")
-    return V, F, joints, 3
+    warnings = []
+    margin = JOINT_INSIDE_MARGIN * height
+    t = np.linspace(0.0, 0.5, 51)[1:]
+    for i in outside[np.argsort(depth[outside])[::-1]]:  # nearest the skin first
+        incident = np.flatnonzero((bones == i).any(axis=1))
+        if len(incident) == 0:
+            continue  # a joint no bone uses does not move anything
+        others = np.where(bones[incident, 0] == i, bones[incident, 1], bones[incident, 0])
+        k = int(np.argmax(depth[others]))
+        a, b = joints[i], joints[others[k]]
+        points = a + t[:, None] * (b - a)
+        d = -np.asarray(igl.signed_distance(points, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
+        deep = np.flatnonzero(d >= margin)
+        s = int(deep[0]) if len(deep) else int(np.argmax(d))
+        if d[s] <= 0:
+            raise InputError(path, f"joint {i + 1} lies {100 * -depth[i] / height:.2f} % of the model's height "
+                             f"outside the surface and bone {incident[k] + 1} does not enter it; "
+                             "move the joint inside")
+        warnings.append(f"joint {i + 1} lay {100 * -depth[i] / height:.2f} % of the model's height outside the "
+                        f"surface; moved {np.linalg.norm(points[s] - a):.3g} along bone {incident[k] + 1} to lie "
+                        "inside")
+        joints[i] = points[s]
+        depth[i] = d[s]
+    return joints, warnings
 
 
 def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -294,7 +374,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     F = np.asarray(faces, np.int64)
     J = np.asarray(joints, np.float64)
     B = np.asarray(bones, np.int64)
-    V, F, J, dim = _check_inputs(V, F, J, B, mesh_path, skeleton_path)
+    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path)
     up_vec = parse_up(up, dim)
     t0 = time.perf_counter()
     if tet_mesh is not None:
@@ -320,7 +400,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         W = compute_weights(TV, TT, J, B, bbw_iterations)
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
-            "bbw_iterations": bbw_iterations}
+            "bbw_iterations": bbw_iterations, "warnings": warnings}
     return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info)
 
 
@@ -457,7 +537,8 @@ def _write_cached(file: Path, rig: Rig) -> None:
     file.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(file) as tmp:
         with open(tmp, "wb") as fh:
-            np.savez(fh, version=CACHE_VERSION, **{k: getattr(rig, k) for k in _ARRAYS})
+            np.savez(fh, version=CACHE_VERSION, warnings=np.array(rig.info.get("warnings", []), dtype=str),
+                     **{k: getattr(rig, k) for k in _ARRAYS})
 
 
 def _read_cached(file: Path, name: str) -> Rig:
@@ -465,4 +546,5 @@ def _read_cached(file: Path, name: str) -> Rig:
         if int(data["version"]) != CACHE_VERSION:
             raise ValueError("old cache version")
         arrays = {k: data[k] for k in _ARRAYS}
-    return Rig(**arrays, name=name, info={})
+        warnings = [str(w) for w in data["warnings"]]
+    return Rig(**arrays, name=name, info={"warnings": warnings})
