@@ -148,14 +148,53 @@ def test_render_2d(tmp_path):
     assert _red_pixels(_read(p2, (300, 320))) > 50
 
 
+def _extent_px(mask):
+    """(height, width) in pixels of the bounding box of the True pixels."""
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    return rows[-1] - rows[0] + 1, cols[-1] - cols[0] + 1
+
+
+def _green(img):
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    return (g > 0.3) & (g > 1.8 * r) & (g > 1.8 * b)
+
+
+# The projection is orthographic and linear, so a figure scaled by 1.5 about the
+# origin is exactly 1.5 times as tall and wide on screen when the framing is the
+# same. On a ~130-pixel silhouette, rasterisation moves each edge by up to a pixel:
+# the measured ratio is within 1.5 * 2 / 129 < 0.03 of the true one.
+SCALE, RATIO_TOL = 1.5, 0.03
+
+
 def test_shared_bounds_give_same_framing(tmp_path, tpose):
     V, F, _, _ = tpose
-    bounds = view_bounds(V, V * 1.1)
+    bounds = view_bounds(V, V * SCALE)
     assert bounds.shape == (2, 3)
-    p1, p2 = tmp_path / "a.png", tmp_path / "b.png"
-    render_mesh(p1, V, F, UP, bounds=bounds, size=(200, 200))
-    render_mesh(p2, V, F, UP, bounds=bounds, size=(200, 200))
-    assert np.array_equal(_read(p1, (200, 200)), _read(p2, (200, 200)))
+    np.testing.assert_array_equal(bounds, [V.min(0) * SCALE, V.max(0) * SCALE])  # min y is 0, min x, z < 0
+
+    def extent(vertices, bounds):
+        path = tmp_path / "frame.png"
+        render_mesh(path, vertices, F, UP, face_colors=[0.1, 0.8, 0.1], bounds=bounds, size=(300, 300))
+        return np.array(_extent_px(_green(_read(path, (300, 300)))))
+
+    shared = extent(V * SCALE, bounds) / extent(V, bounds)
+    np.testing.assert_allclose(shared, [SCALE, SCALE], rtol=0, atol=RATIO_TOL)
+    # framed each on its own mesh, the scaled figure fills the picture the same way: the check above
+    # tells the two apart
+    own = extent(V * SCALE, None) / extent(V, None)
+    np.testing.assert_allclose(own, [1.0, 1.0], rtol=0, atol=RATIO_TOL)
+
+
+def test_before_after_panels_share_the_framing(tmp_path, tpose):
+    V, F, _, _ = tpose
+    everything = np.ones(len(F), bool)  # all red, to find each figure in its panel
+    p = tmp_path / "ba.png"
+    render_before_after(p, (V, F), (V * SCALE, F), UP, before_risky=everything, after_risky=everything,
+                        size=(600, 300))
+    img = _read(p, (600, 300))
+    red = (img[..., 0] > 0.3) & (img[..., 0] > 2.0 * img[..., 1]) & (img[..., 0] > 2.0 * img[..., 2])
+    ratio = np.array(_extent_px(red[:, 300:])) / np.array(_extent_px(red[:, :300]))
+    np.testing.assert_allclose(ratio, [SCALE, SCALE], rtol=0, atol=RATIO_TOL)
 
 
 def test_other_up_axis(tmp_path, tpose):
