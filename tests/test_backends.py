@@ -94,7 +94,7 @@ def test_short_search_same_on_both_backends(branch_rig):
 
 def test_fast_ray_grid_overflow_falls_back(monkeypatch):
     """A pose whose crossings overflow the fast kernel's buffers is recomputed by the general kernel."""
-    from supportless.energies import _raycast as rc
+    from supportless.energies import _grid_fast, _grid_reference
 
     # 4 stacked, overlapping boxes: 8 crossings per ray
     F1 = np.array([[0, 2, 1], [1, 2, 3], [4, 5, 6], [5, 7, 6], [0, 1, 4], [1, 5, 4],
@@ -109,14 +109,14 @@ def test_fast_ray_grid_overflow_falls_back(monkeypatch):
     want_sup = support_volume(V, F, up, resolution=40, backend="numpy")
     want_int = self_intersection_volume(V, F, up, resolution=40, backend="numpy")
     calls = []
-    general = rc._grid3_batch
+    general = _grid_reference.grid_batch
 
     def spy(*args):
         calls.append(len(args[0]))
         return general(*args)
 
-    monkeypatch.setattr(rc, "_grid3_batch", spy)
-    monkeypatch.setattr(rc, "_CROSSINGS_PER_PIXEL", 0)  # buffers of 1024 crossings: too small
+    monkeypatch.setattr(_grid_reference, "grid_batch", spy)
+    monkeypatch.setattr(_grid_fast, "_CROSSINGS_PER_PIXEL", 0)  # buffers of 1024 crossings: too small
     np.testing.assert_allclose(support_volume(V, F, up, resolution=40), want_sup, rtol=1e-12)
     np.testing.assert_allclose(self_intersection_volume(V, F, up, resolution=40), want_int, rtol=1e-12, atol=0)
     assert calls == [2, 2]

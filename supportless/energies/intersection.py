@@ -10,7 +10,8 @@ is at least 2 is summed over rays and multiplied by the cell area.
 
 from __future__ import annotations
 
-from ._raycast import DEFAULT_RESOLUTION, prepare, ray_grid
+from .raygrid import DEFAULT_RESOLUTION, ray_grid
+from .surface import prepare
 
 __all__ = ["self_intersection_volume", "DEFAULT_RESOLUTION"]
 

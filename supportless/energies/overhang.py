@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ._raycast import boundary_edges, check_backend, orientation_sign, prepare
+from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area", "boundary_edges"]
 

@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._raycast import DEFAULT_RESOLUTION, prepare, ray_grid
+from .raygrid import DEFAULT_RESOLUTION, ray_grid
+from .surface import prepare
 
 __all__ = ["support_volume", "DEFAULT_RESOLUTION"]
 
