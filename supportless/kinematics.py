@@ -132,6 +132,37 @@ def euler_to_matrix(angles: np.ndarray) -> np.ndarray:
     return R
 
 
+def matrix_to_euler(R: np.ndarray) -> np.ndarray:
+    """XYZ Euler angles of rotation matrices: the inverse of :func:`euler_to_matrix`.
+
+    ``euler_to_matrix(matrix_to_euler(R))`` is ``R`` to round-off, also at and
+    near gimbal lock (``a1 = ±90°``), where only ``a0 ± a2`` is determined: the
+    third angle is solved from the first two so the pair still rebuilds ``R``.
+
+    Parameters
+    ----------
+    R : (..., 3, 3) float64
+        Rotation matrices.
+
+    Returns
+    -------
+    angles : (..., 3) float64
+        Radians ``(a0, a1, a2)`` with ``R = Rx(a0) @ Ry(a1) @ Rz(a2)``;
+        ``a0, a2`` in ``[-pi, pi]``, ``a1`` in ``[-pi/2, pi/2]``. At gimbal
+        lock ``a0 = 0``.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    cos_a1 = np.hypot(R[..., 0, 0], R[..., 0, 1])
+    a1 = np.arctan2(R[..., 0, 2], cos_a1)
+    # a0 from the last column (-sx cy, cx cy); undefined at gimbal lock (cy = 0): take 0
+    locked = np.hypot(R[..., 1, 2], R[..., 2, 2]) < 1e-12
+    a0 = np.where(locked, 0.0, np.arctan2(-R[..., 1, 2], R[..., 2, 2]))
+    # a2 from the middle row of Rx(a0)^T R = Ry(a1) Rz(a2), which is (sin a2, cos a2, 0)
+    c0, s0 = np.cos(a0), np.sin(a0)
+    a2 = np.arctan2(c0 * R[..., 1, 0] + s0 * R[..., 2, 0], c0 * R[..., 1, 1] + s0 * R[..., 2, 1])
+    return np.stack([a0, a1, a2], axis=-1)
+
+
 def planar_rotation(theta: np.ndarray) -> np.ndarray:
     """2D rotation matrices.
 

@@ -54,6 +54,29 @@ def test_euler_matrix_is_a_rotation_matching_scipy():
     np.testing.assert_allclose(kin.euler_to_matrix([0, 0, 0.3]), _rz(0.3), atol=1e-15)
 
 
+def test_matrix_to_euler_inverts_euler_to_matrix_also_near_gimbal_lock():
+    rng = np.random.default_rng(3)
+    a = rng.uniform(-np.pi, np.pi, (200, 3))
+    a[:, 1] = rng.uniform(-np.pi / 2, np.pi / 2, 200)
+    # the middle angle at and near +-90 degrees (gimbal lock)
+    near = np.pi / 2 - np.array([0.0, 1e-15, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 1e-1])
+    a[: 2 * len(near), 1] = np.concatenate([near, -near])
+    R = kin.euler_to_matrix(a)
+    back = kin.matrix_to_euler(R)
+    assert back.shape == a.shape
+    # euler -> matrix -> euler -> matrix: the same rotation everywhere
+    np.testing.assert_allclose(kin.euler_to_matrix(back), R, atol=1e-13)
+    assert np.all(np.abs(back[:, 1]) <= np.pi / 2) and np.all(np.abs(back) <= np.pi)
+    # away from gimbal lock the angles themselves come back
+    far = np.cos(a[:, 1]) > 1e-3
+    np.testing.assert_allclose(back[far], a[far], atol=1e-9)
+    # at gimbal lock only a0 + a2 (a1 = +90) or a0 - a2 (a1 = -90) matters; a0 is set to 0
+    locked = kin.matrix_to_euler(kin.euler_to_matrix([[0.3, np.pi / 2, 0.2], [0.3, -np.pi / 2, 0.2]]))
+    np.testing.assert_allclose(locked, [[0.0, np.pi / 2, 0.5], [0.0, -np.pi / 2, -0.1]], atol=1e-12)
+    # one matrix in, one angle triple out; a single axis is that axis
+    np.testing.assert_allclose(kin.matrix_to_euler(_ry(0.4)), [0.0, 0.4, 0.0], atol=1e-15)
+
+
 def test_planar_rotation_is_counter_clockwise():
     R = kin.planar_rotation(np.pi / 2)
     np.testing.assert_allclose(R @ [1.0, 0.0], [0.0, 1.0], atol=1e-15)

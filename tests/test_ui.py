@@ -1,5 +1,6 @@
-"""Tests of the viser web app (supportless.ui): app state without a browser, and
-the page itself driven through Playwright in Debian's Chromium.
+"""Tests of the viser web app (supportless.ui): the app wired to a server, and
+the page itself driven through Playwright in Debian's Chromium. The editing
+state alone (no server) is tested in test_ui_state.py.
 
 The browser test saves a screenshot to ``test-artifacts/ui.png``.
 """
@@ -15,7 +16,8 @@ import pytest
 
 from supportless import io as sio
 from supportless.errors import InputError
-from supportless.rig import load_rig, prepare_rig
+from supportless.rig import load_rig
+from supportless.settings import SearchSettings
 
 pytest.importorskip("viser")
 
@@ -25,27 +27,9 @@ CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
 
 
-def _box_arm_rig():
-    """A post with a horizontal arm (two bones), for when the demo figures are missing."""
-    import manifold3d as mf
-
-    post = mf.Manifold.cube([10.0, 40.0, 10.0]).translate([-5.0, 0.0, -5.0])
-    arm = mf.Manifold.cube([30.0, 8.0, 8.0]).translate([0.0, 30.0, -4.0])
-    mesh = (post + arm).to_mesh()
-    V = np.asarray(mesh.vert_properties, np.float64)[:, :3]
-    F = np.asarray(mesh.tri_verts, np.int64)
-    J = np.array([[0.0, 3.0, 0.0], [0.0, 34.0, 0.0], [27.0, 34.0, 0.0]])
-    B = np.array([[0, 1], [1, 2]])
-    return prepare_rig(V, F, J, B, up="y", name="box-arm")
-
-
 @pytest.fixture(scope="module")
-def rig():
-    try:
-        import supportless.shapes  # noqa: F401
-    except ImportError:
-        return _box_arm_rig()
-    return load_rig("demo:branch")
+def rig(branch_rig):
+    return branch_rig
 
 
 @pytest.fixture(scope="module")
@@ -85,47 +69,46 @@ def test_posing_updates_measures_and_latency(app, rig):
     app.reset()
     assert app.wait_idle()
     rest = dict(app.measures)
-    assert rest["prism_reduction"] == pytest.approx(0.0, abs=1e-9)
+    assert rest["reduction"]["overhang_prism"] == pytest.approx(0.0, abs=1e-9)
     b = rig.bone_count - 1
-    app.set_bone_angles(b, [0.0, 0.0, 40.0])
+    app.state.set_bone_angles(b, [0.0, 0.0, 40.0])
     assert app.wait_idle()
     assert app.measures["objective"] != pytest.approx(rest["objective"])
     assert app.measures["terms"]["arap"] > rest["terms"]["arap"]
     assert app.latency_ms["mesh"] >= 0 and app.latency_ms["full"] >= app.latency_ms["mesh"]
-    assert "Objective:" in app.gui_measures.content
+    assert "Objective:" in app.panel.measures.content
 
 
 def test_undo_redo_reset(app, rig):
     app.reset()
     app.wait_idle()
     b = rig.bone_count - 1
-    app.set_bone_angles(b, [10.0, 0.0, 0.0], key="a")
-    app.set_bone_angles(b, [10.0, 20.0, 0.0], key="b")  # another control: a separate step
-    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 20, 0])
+    app.state.set_bone_angles(b, [10.0, 0.0, 0.0], key="a")
+    app.state.set_bone_angles(b, [10.0, 20.0, 0.0], key="b")  # another control: a separate step
+    assert np.allclose(np.degrees(app.state.get_angles()[b]), [10, 20, 0])
     assert app.undo()
-    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert np.allclose(np.degrees(app.state.get_angles()[b]), [10, 0, 0])
     assert app.undo()
-    assert np.allclose(app.get_angles(), 0.0)
+    assert np.allclose(app.state.get_angles(), 0.0)
     assert app.redo()
-    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert np.allclose(np.degrees(app.state.get_angles()[b]), [10, 0, 0])
     app.reset()
-    assert np.allclose(app.get_angles(), 0.0)
+    assert np.allclose(app.state.get_angles(), 0.0)
     assert app.undo()  # reset is undoable
-    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert np.allclose(np.degrees(app.state.get_angles()[b]), [10, 0, 0])
     # the sliders follow the selected bone
-    app.select_bone(b)
-    assert [s.value for s in app.gui_sliders] == [10.0, 0.0, 0.0]
+    app.state.select_bone(b)
+    assert [s.value for s in app.panel.sliders] == [10.0, 0.0, 0.0]
     # a drag of one slider is one undo step
     for v in range(11, 30):
-        app.set_bone_angles(b, [v, 0.0, 0.0], key=("slider", b, 0))
+        app.state.set_bone_angles(b, [v, 0.0, 0.0], key=("slider", b, 0))
     assert app.undo()
-    assert np.allclose(np.degrees(app.get_angles()[b]), [10, 0, 0])
+    assert np.allclose(np.degrees(app.state.get_angles()[b]), [10, 0, 0])
     assert app.wait_idle()
 
 
-def test_gizmo_rotation_becomes_relative_euler_angles(app, rig):
+def test_gizmo_drag_becomes_relative_euler_angles_and_one_undo_step(app, rig):
     from supportless.kinematics import euler_to_matrix
-    from supportless.ui.app import _quat_from_matrix
 
     app.reset()
     child = int(np.flatnonzero(rig.parents >= 0)[-1])
@@ -133,12 +116,18 @@ def test_gizmo_rotation_becomes_relative_euler_angles(app, rig):
     target = np.zeros((rig.bone_count, 3))
     target[parent] = np.radians([10.0, -20.0, 15.0])
     target[child] = np.radians([25.0, 30.0, -40.0])
-    app.set_angles(np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target))
-    app.select_bone(child)
+    before = np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target)
+    app.state.set_angles(before)
+    app.state.select_bone(child)
     world = rig.transforms(target)[parent][:, :3] @ euler_to_matrix(target[child])
-    app._on_gizmo(_quat_from_matrix(world))
-    assert np.allclose(app.get_angles(), target, atol=1e-6)
-    assert app.gui_sliders[2].value == pytest.approx(-40.0)
+    app._on_gizmo("start", np.eye(3))
+    for k in (0.3, 0.7, 1.0):  # the drag's last position is the target
+        app._on_gizmo("update", world if k == 1.0 else euler_to_matrix(k * target[child]))
+    app._on_gizmo("end", world)
+    assert np.allclose(app.state.get_angles(), target, atol=1e-6)
+    assert app.panel.sliders[2].value == pytest.approx(-40.0)
+    assert app.undo()  # the whole drag is one step
+    assert np.allclose(app.state.get_angles(), before)
     assert app.wait_idle()
 
 
@@ -150,9 +139,9 @@ def test_planar_rig(tmp_path):
     a = App(rig2, verbose=False, workdir=tmp_path)
     try:
         assert a.wait_idle(60)
-        a.set_bone_angles(rig2.bone_count - 1, [0, 0, 30.0])
+        a.state.set_bone_angles(rig2.bone_count - 1, [0, 0, 30.0])
         assert a.wait_idle()
-        assert "not checked (2D)" in a.gui_measures.content
+        assert "not checked (2D)" in a.panel.measures.content
         assert a.export_mesh(tmp_path / "flat.stl")
     finally:
         a.stop()
@@ -160,15 +149,15 @@ def test_planar_rig(tmp_path):
 
 def test_save_and_load_pose(app, rig, tmp_path):
     app.reset()
-    app.set_bone_angles(rig.bone_count - 1, [0, 0, 25.0])
-    target = app.get_angles()
+    app.state.set_bone_angles(rig.bone_count - 1, [0, 0, 25.0])
+    target = app.state.get_angles()
     path = tmp_path / "pose.json"
     assert app.save_pose(path)
     app.reset()
     assert app.load_pose(path)
-    assert np.allclose(app.get_angles(), target)
+    assert np.allclose(app.state.get_angles(), target)
     assert app.load_pose_bytes("up.json", path.read_bytes())
-    assert np.allclose(app.get_angles(), target)
+    assert np.allclose(app.state.get_angles(), target)
 
 
 def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_path):
@@ -177,11 +166,11 @@ def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_pa
     other = tmp_path / "other.json"
     bones = _other_bones(rig)
     sio.write_pose(other, np.zeros((len(bones), 3)), bones)
-    before = app.get_angles()
+    before = app.state.get_angles()
     assert not app.load_pose(other)
     assert "skeleton" in app.status and app.status.startswith("Error")
-    assert "Error" in app.gui_status.content and "skeleton" in app.gui_status.content
-    assert np.array_equal(app.get_angles(), before)
+    assert "Error" in app.panel.status.content and "skeleton" in app.panel.status.content
+    assert np.array_equal(app.state.get_angles(), before)
 
     junk = tmp_path / "junk.json"
     junk.write_text("{not json")
@@ -192,7 +181,7 @@ def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_pa
     assert not app.load_pose_bytes("x.json", b"\x00\x01")
 
     # still serving and drawing
-    app.set_bone_angles(0, [0, 0, 5.0])
+    app.state.set_bone_angles(0, [0, 0, 5.0])
     assert app.wait_idle()
     assert app._worker.is_alive()
     import urllib.request
@@ -205,41 +194,67 @@ def test_export_mesh_on_the_plate(app, rig, tmp_path):
     import trimesh
 
     app.reset()
-    app.set_bone_angles(0, [0, 0, 30.0])
+    app.state.set_bone_angles(0, [0, 0, 30.0])
     for ext in ("stl", "3mf"):
         p = tmp_path / f"posed.{ext}"
         assert app.export_mesh(p)
         m = trimesh.load(p, force="mesh")
         assert len(m.faces) == len(rig.faces)
         assert float((m.vertices @ rig.up).min()) == pytest.approx(0.0, abs=1e-5)
-    assert len(app.mesh_bytes("stl")) > 84
+    assert len(app.state.mesh_bytes("stl")) > 84
     assert not app.export_mesh(tmp_path / "posed.xyz")
     assert "unknown output format" in app.status
 
 
-def test_optimise_in_background_and_cancel(app, rig):
+def test_optimize_in_background_and_cancel(app, rig):
     app.reset()
     app.wait_idle()
-    rest_column = app.measures["column"]
-    assert app.start_optimise(particles=12, iterations=4, seed=1)
-    assert not app.start_optimise()  # one search at a time
-    assert app.wait_optimise(300)
-    assert app.last_result is not None and not app.last_result.interrupted
-    assert np.allclose(app.get_angles(), app.last_result.angles)
+    rest_column = app.measures["support_column"]
+    assert app.start_optimize(particles=12, iterations=4, seed=1)
+    assert not app.start_optimize()  # one search at a time
+    assert app.state.wait_optimize(300)
+    assert app.state.last_result is not None and not app.state.last_result.interrupted
+    assert np.allclose(app.state.get_angles(), app.state.last_result.angles)
     assert app.wait_idle()
-    assert app.measures["column"] < rest_column
-    assert app.opt_progress["iteration"] == 4
+    assert app.measures["support_column"] < rest_column
+    assert app.state.progress["iteration"] == 4
     # the user can undo back to where the search started, and cancel a long search
     assert app.undo()
-    assert np.allclose(app.get_angles(), 0.0)
-    assert app.start_optimise(particles=8, iterations=100000)
-    app.cancel_optimise()
-    assert app.wait_optimise(120)
-    assert app.last_result.interrupted
+    assert np.allclose(app.state.get_angles(), 0.0)
+    assert app.start_optimize(particles=8, iterations=100000)
+    app.state.cancel_optimize()
+    assert app.state.wait_optimize(120)
+    assert app.state.last_result.interrupted
     assert "cancelled" in app.status
     # bad fixed-bone text
-    assert not app.start_optimise(fix=["99"])
+    assert not app.start_optimize(fix=["99"])
     assert "out of range" in app.status
+
+
+def test_panel_shows_the_objective_its_search_minimises(app, rig):
+    app.reset()
+    app.state.set_bone_angles(rig.bone_count - 1, [0, 0, 30.0])
+    defaults = SearchSettings()
+    try:
+        assert app.change_setting("w_overhang", 3.0)
+        assert app.change_setting("overhang_angle", 50.0)
+        assert app.wait_idle()
+        expected = float(SearchSettings(w_overhang=3.0, overhang_angle=50.0).objective(rig)(app.state.get_angles()))
+        assert app.measures["objective"] == pytest.approx(expected, rel=1e-12)
+        assert _number(app.panel.measures.content, "Objective") == pytest.approx(expected, rel=1e-3)
+        assert "faces past 60°" in app.panel.measures.content  # the search's threshold: 50 + margin
+        # a bone list the rig does not have: a note in the panel, and the search does not start
+        assert not app.change_setting("fix", "99")
+        assert "out of range 1..3" in app.panel.fixed_info.content
+        assert not app.start_optimize()
+        assert "out of range" in app.status and not app.state.optimizing
+        assert app.change_setting("fix", "")
+        assert "out of range" not in app.panel.fixed_info.content
+    finally:
+        for name in ("w_overhang", "overhang_angle", "fix"):
+            app.change_setting(name, getattr(defaults, name))
+    assert app.state.settings == defaults
+    assert app.wait_idle()
 
 
 # --------------------------------------------------------------------------- #
@@ -285,7 +300,7 @@ def test_page_in_chromium(rig, tmp_path):
             page.get_by_role("combobox").first.click()
             page.get_by_role("option", name=last).click()
             page.wait_for_function("n => document.body.innerText.includes(n)", arg=f"Bone {rig.bone_count}:")
-            assert app.selected == rig.bone_count - 1
+            assert app.state.selected == rig.bone_count - 1
             slider = page.get_by_role("slider").nth(2)
             slider.focus()
             for _ in range(25):
@@ -294,7 +309,7 @@ def test_page_in_chromium(rig, tmp_path):
                 "o => { const t = document.body.innerText.match(/Objective:\\s*([-+0-9.eE]+)/);"
                 " return t && Math.abs(parseFloat(t[1]) - o) > 1e-9; }", arg=rest_objective, timeout=30000)
             app.wait_idle()
-            assert np.degrees(app.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
             moved_text = energies.inner_text()
             assert _number(moved_text, "Objective") != rest_objective
             assert _number(moved_text, "ARAP term") > _number(rest_text, "ARAP term")
@@ -305,7 +320,7 @@ def test_page_in_chromium(rig, tmp_path):
             sio.write_pose(bad, np.zeros((len(bones), 3)), bones)
             page.locator("input[type=file]").set_input_files(str(bad))
             page.get_by_text(re.compile("Error:.*skeleton")).first.wait_for(timeout=30000)
-            assert np.degrees(app.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
             # the posed mesh as an STL download
             page.get_by_text("Files", exact=True).click()
             with page.expect_download(timeout=30000) as dl:
@@ -326,9 +341,9 @@ def test_page_in_chromium(rig, tmp_path):
                 box.fill(value)
                 box.press("Tab")
             page.wait_for_timeout(300)
-            assert app.optimise_settings()["particles"] == 20
-            assert app.optimise_settings()["iterations"] == 10
-            page.get_by_role("button", name="Optimise").click()
+            assert app.state.settings.particles == 20
+            assert app.state.settings.iterations == 10
+            page.get_by_role("button", name="Optimize").click()
             page.get_by_text(re.compile("search finished")).wait_for(timeout=300000)
             assert "iteration 10 / 10" in page.locator("body").inner_text()
             app.wait_idle()

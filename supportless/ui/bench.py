@@ -23,7 +23,7 @@ def server_latency(app, edits: int = 40, bone: int | None = None) -> dict:
     app.wait_idle(60)
     mesh, full = [], []
     for k in range(edits):
-        app.set_bone_angles(bone, [0.0, 0.0, (k % 2) * 20.0 + k * 0.5], key=None)
+        app.state.set_bone_angles(bone, [0.0, 0.0, (k % 2) * 20.0 + k * 0.5], key=None)
         app.wait_idle(30)
         mesh.append(app.latency_ms["mesh"])
         full.append(app.latency_ms["full"])

@@ -1,0 +1,495 @@
+"""The viewer's editing state, without a browser or a server.
+
+:class:`EditorState` holds what the page edits and shows: the current pose,
+the selected bone, undo/redo, the search settings (one
+:class:`~supportless.settings.SearchSettings`), the objective they define, the
+measures of a pose, pose and mesh files, and the pose search running in the
+background. The web app (:mod:`supportless.ui.app`) draws it and forwards the
+page's events to it; tests drive it directly.
+
+Actions raise on bad input (:class:`~supportless.errors.SupportlessError`,
+``OSError``, ``ValueError``) and leave the state as it was; the app turns the
+exception into a message in the page. Every change is announced to the
+listeners given to :meth:`EditorState.subscribe` as ``listener(event, **info)``:
+
+``"pose"``
+    The angles changed (``origin``: who changed them, e.g. ``"slider"``,
+    ``"gizmo"``, ``"search"``, or None).
+``"selection"``
+    Another bone is selected.
+``"settings"``
+    The search settings, and with them the objective and fixed bones, changed.
+``"search_started"``
+    A search starts (see ``search_settings`` and ``progress``).
+``"progress"``
+    The running search finished an iteration (see ``progress``).
+``"search_done"``
+    The search ended (``result``: its :class:`~supportless.search.PoseResult`,
+    or ``error``: the exception it raised).
+"""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+import threading
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .. import io as sio
+from ..energies.exact import intersecting_faces
+from ..energies.overhang import risky_faces
+from ..geometry import place_on_plate
+from ..kinematics import matrix_to_euler
+from ..objective import Objective
+from ..report import pose_measures, reduction
+from ..search import PoseResult, optimize
+from ..settings import SearchSettings
+from .history import PoseHistory
+
+__all__ = ["EditorState", "REDUCED_MEASURES"]
+
+logger = logging.getLogger("supportless.ui")
+
+#: Measures compared with the rest pose (``measures["reduction"]``, percent).
+REDUCED_MEASURES = ("overhang_prism", "support_column", "risky_area")
+
+
+def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
+    """The bytes ``write(path)`` puts in a temporary file called ``name``."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / name
+        write(path)
+        return path.read_bytes()
+
+
+class EditorState:
+    """The pose being edited, its measures and its search, for one rig.
+
+    Parameters
+    ----------
+    rig : supportless.rig.Rig
+    settings : SearchSettings, optional
+        The search settings to start with (default: ``SearchSettings()``).
+    workdir : str or os.PathLike, optional
+        Folder of relative pose and mesh paths (default: the current folder).
+
+    Attributes
+    ----------
+    rig : supportless.rig.Rig
+    workdir : pathlib.Path
+    history : PoseHistory
+        Undo and redo steps.
+    settings : SearchSettings
+        What the Optimize button searches with.
+    objective : Objective
+        ``settings.objective(rig)``: what the search minimises and the
+        measures report.
+    fixed : (m,) bool
+        Bones the search keeps (``settings.fixed_bones(rig)``).
+    rest_measures : dict
+        :meth:`measure` of the rest pose (without the exact test).
+    progress : dict
+        Of the last search: ``iteration``, ``iterations``, ``value`` (best
+        objective), ``running``, ``cancelled``, ``free_bones``.
+    search_settings : SearchSettings or None
+        What the last search was started with.
+    last_result : PoseResult or None
+        The last finished search.
+    """
+
+    def __init__(self, rig, settings: SearchSettings | None = None, workdir=None):
+        self.rig = rig
+        self.workdir = Path(workdir) if workdir is not None else Path.cwd()
+        self.history = PoseHistory()
+        self._lock = threading.RLock()
+        self._angles = rig.rest_angles()
+        self._selected = 0
+        self._listeners: list[Callable] = []
+        self.settings = settings if settings is not None else SearchSettings()
+        self.fixed = self.settings.fixed_bones(rig)
+        self.objective = self.settings.objective(rig)
+        self.rest_measures = self._measure(self.objective, self.settings, rig.rest_angles(), exact=False)
+        self.progress: dict = {}
+        self.last_result: PoseResult | None = None
+        self.search_settings: SearchSettings | None = None
+        self._search: threading.Thread | None = None
+        self._cancel = threading.Event()
+
+    # ------------------------------------------------------------ listeners
+    def subscribe(self, listener: Callable[..., None]) -> None:
+        """Call ``listener(event, **info)`` after every change (see the module docstring)."""
+        self._listeners.append(listener)
+
+    def _notify(self, event: str, **info) -> None:
+        for listener in list(self._listeners):
+            listener(event, **info)
+
+    # ----------------------------------------------------------------- pose
+    def get_angles(self) -> np.ndarray:
+        """A copy of the current pose.
+
+        Returns
+        -------
+        angles : (m, 3) float64
+            XYZ Euler angles per bone, radians.
+        """
+        with self._lock:
+            return self._angles.copy()
+
+    @property
+    def selected(self) -> int:
+        """The bone the sliders and the gizmo act on (0-based)."""
+        return self._selected
+
+    def set_angles(self, angles, *, record: bool = True, key=None, origin: str | None = None) -> None:
+        """Replace the whole pose.
+
+        Parameters
+        ----------
+        angles : (m, 3) float64
+            Radians.
+        record : bool
+            Make it an undo step.
+        key : hashable, optional
+            The control making the edit: edits of one control in a row are one
+            undo step (see :class:`PoseHistory`).
+        origin : str, optional
+            Passed on to the listeners.
+
+        Raises
+        ------
+        ValueError
+            When ``angles`` is not one triple per bone.
+        """
+        angles = np.array(angles, np.float64)
+        if angles.shape != self._angles.shape:
+            raise ValueError(f"pose has shape {angles.shape}, the rig needs {self._angles.shape}")
+        with self._lock:
+            if record:
+                self.history.record(self._angles, key)
+            self._angles = angles
+        self._notify("pose", origin=origin)
+
+    def set_bone_angles(self, bone: int, degrees, *, key=None, origin: str | None = None) -> None:
+        """Set one bone's Euler angles.
+
+        Parameters
+        ----------
+        bone : int
+            0-based.
+        degrees : (3,) float64
+            XYZ Euler angles relative to the parent bone, degrees.
+        key : hashable, optional
+            Undo grouping (default: one step per call unless the same bone is
+            edited again within a second).
+        """
+        angles = self.get_angles()
+        angles[bone] = np.radians(np.asarray(degrees, np.float64))
+        self.set_angles(angles, key=("bone", bone) if key is None else key, origin=origin)
+
+    def set_bone_rotation(self, bone: int, rotation, *, record: bool = False, origin: str | None = "gizmo") -> None:
+        """Turn a bone to a rotation given in world coordinates (what the gizmo shows).
+
+        Parameters
+        ----------
+        bone : int
+            0-based.
+        rotation : (3, 3) float64
+            The bone's rotation in the world; it becomes Euler angles relative
+            to the parent bone. A planar rig keeps the angle about z.
+        record : bool
+            Make it an undo step (a drag records once, when it starts).
+        """
+        R = np.asarray(rotation, np.float64)
+        d = self.rig.dim
+        angles = self.get_angles()
+        parent = int(self.rig.parents[bone])
+        local = R[:d, :d] if parent < 0 else self.rig.transforms(angles)[parent][:, :d].T @ R[:d, :d]
+        angles[bone] = [0.0, 0.0, np.arctan2(local[1, 0], local[0, 0])] if d == 2 else matrix_to_euler(local)
+        self.set_angles(angles, record=record, origin=origin)
+
+    def select_bone(self, bone: int) -> None:
+        """Select the bone the sliders and the gizmo act on (0-based).
+
+        Raises
+        ------
+        ValueError
+            For a bone number outside ``0..m-1``.
+        """
+        if not 0 <= bone < self.rig.bone_count:
+            raise ValueError(f"bone {bone} out of range 0..{self.rig.bone_count - 1}")
+        self._selected = int(bone)
+        self._notify("selection")
+
+    def checkpoint(self) -> None:
+        """Make the current pose an undo step (a drag calls it once, when it starts)."""
+        with self._lock:
+            self.history.record(self._angles)
+
+    def _step(self, go: Callable[[np.ndarray], np.ndarray | None]) -> bool:
+        with self._lock:
+            pose = go(self._angles)
+            if pose is None:
+                return False
+            self._angles = pose
+        self._notify("pose", origin=None)
+        return True
+
+    def undo(self) -> bool:
+        """Go back one edit; False when there is nothing to undo."""
+        return self._step(self.history.undo)
+
+    def redo(self) -> bool:
+        """Redo the last undone edit; False when there is none."""
+        return self._step(self.history.redo)
+
+    def reset(self) -> None:
+        """Back to the rest pose (undoable)."""
+        self.set_angles(self.rig.rest_angles())
+
+    # ---------------------------------------------------------------- files
+    def resolve_path(self, path) -> Path:
+        """``path`` with ``~`` expanded, relative to :attr:`workdir`."""
+        p = Path(str(path).strip()).expanduser()
+        return p if p.is_absolute() else self.workdir / p
+
+    def save_pose(self, path) -> Path:
+        """Write the current pose as a pose JSON file (with its objective and the settings).
+
+        Returns
+        -------
+        path : pathlib.Path
+            Where it was written.
+        """
+        p = self.resolve_path(path)
+        angles = self.get_angles()
+        extra = {"objective": float(self.objective(angles)), "settings": self.settings.to_dict()}
+        sio.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra)
+        return p
+
+    def load_pose(self, path) -> Path:
+        """Make a pose file written for this skeleton the current pose (undoable).
+
+        Returns
+        -------
+        path : pathlib.Path
+            The file read.
+
+        Raises
+        ------
+        SupportlessError
+            For a missing file, one that is not a pose, or a pose of another skeleton.
+        """
+        p = self.resolve_path(path)
+        self.set_angles(sio.read_pose(p, self.rig.bones))
+        return p
+
+    def load_pose_bytes(self, name: str, content: bytes) -> None:
+        """Load an uploaded pose file's content (same checks as :meth:`load_pose`)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            p = Path(tmp) / (Path(name).name or "pose.json")
+            p.write_bytes(content)
+            self.load_pose(p)
+
+    def pose_bytes(self) -> bytes:
+        """The current pose as a pose JSON file's bytes."""
+        angles = self.get_angles()
+        return _file_bytes("pose.json", lambda p: sio.write_pose(p, angles, self.rig.bones, self.rig.joints))
+
+    def posed_on_plate(self) -> np.ndarray:
+        """The current posed surface, its lowest point on the plate.
+
+        Returns
+        -------
+        vertices : (n, d) float64
+        """
+        return place_on_plate(self.rig.pose(self.get_angles()), self.rig.up)
+
+    def export_mesh(self, path) -> Path:
+        """Write the posed mesh (on the plate) as STL, 3MF, OBJ or PLY, by the extension.
+
+        Returns
+        -------
+        path : pathlib.Path
+            Where it was written.
+        """
+        p = self.resolve_path(path)
+        sio.write_mesh(p, self.posed_on_plate(), self.rig.faces)
+        return p
+
+    def mesh_bytes(self, fmt: str) -> bytes:
+        """The posed mesh (on the plate) as a file's bytes, ``fmt`` in stl/3mf/obj/ply."""
+        V = self.posed_on_plate()
+        return _file_bytes(f"mesh.{fmt}", lambda p: sio.write_mesh(p, V, self.rig.faces))
+
+    # ---------------------------------------------------- settings, measures
+    def _objective_for(self, settings: SearchSettings) -> Objective:
+        """``settings.objective(rig)``, sharing the ARAP operators; the current one when it is the same."""
+        current = self.objective
+        shared = current.arap_data if settings.clusters == current.clusters else None
+        candidate = settings.objective(self.rig, arap_data=shared)
+        same = candidate.settings() == current.settings() and candidate.backend == current.backend
+        return current if same else candidate
+
+    def update_settings(self, **changes) -> SearchSettings:
+        """Change search settings; the objective and the measures follow.
+
+        Parameters
+        ----------
+        **changes
+            Fields of :class:`SearchSettings` (``w_arap=3.0``,
+            ``overhang_angle=50``, ``fix="1,2"``...); None values are ignored.
+
+        Returns
+        -------
+        settings : SearchSettings
+            The new settings.
+
+        Raises
+        ------
+        ValueError
+            For an invalid value, e.g. a bone list naming a bone the rig does
+            not have; the settings stay as they were.
+        """
+        new = self.settings.replace(**changes)
+        fixed = new.fixed_bones(self.rig)
+        objective = self._objective_for(new)
+        rest = self.rest_measures
+        if objective is not self.objective or new.overhang_angle != self.settings.overhang_angle:
+            rest = self._measure(objective, new, self.rig.rest_angles(), exact=False)
+        with self._lock:
+            self.settings, self.fixed, self.objective, self.rest_measures = new, fixed, objective, rest
+        self._notify("settings")
+        return new
+
+    def measure(self, angles: np.ndarray | None = None, *, exact: bool = True,
+                vertices: np.ndarray | None = None) -> dict:
+        """Everything the panel shows about a pose, for the current settings.
+
+        Parameters
+        ----------
+        angles : (m, 3) float64, optional
+            Radians (default: the current pose).
+        exact : bool
+            Also find the intersecting triangles (CGAL, 3D only).
+        vertices : (n, d) float64, optional
+            ``rig.pose(angles)`` when the caller has it.
+
+        Returns
+        -------
+        measures : dict
+            :func:`supportless.report.pose_measures` of :attr:`objective` at
+            the printer's threshold ``settings.overhang_angle``, plus
+            ``risky`` ((f,) bool in 3D, one per boundary edge in 2D: needs
+            support), ``intersecting_faces`` ((k,) int64 faces in an
+            intersecting pair, or None when not checked) and ``reduction``
+            (percent less than the rest pose of each of
+            :data:`REDUCED_MEASURES`, None where the rest pose needs none).
+        """
+        with self._lock:
+            objective, settings, rest = self.objective, self.settings, self.rest_measures
+        angles = self.get_angles() if angles is None else angles
+        return self._measure(objective, settings, angles, exact=exact, vertices=vertices, rest=rest)
+
+    def _measure(self, objective: Objective, settings: SearchSettings, angles: np.ndarray, *, exact: bool,
+                 vertices: np.ndarray | None = None, rest: dict | None = None) -> dict:
+        rig = self.rig
+        V = rig.pose(angles) if vertices is None else vertices
+        out = pose_measures(objective, angles, exact=False, overhang_angle=settings.overhang_angle, vertices=V)
+        out["risky"] = np.asarray(risky_faces(V, rig.faces, rig.up, settings.overhang_angle), bool)
+        out["intersecting_faces"] = None
+        if exact and rig.dim == 3:
+            pairs = intersecting_faces(V, rig.faces)
+            out["intersecting_face_pairs"] = len(pairs)
+            out["intersecting_faces"] = np.unique(pairs)
+        if rest is not None:
+            out["reduction"] = {k: reduction(rest[k], out[k]) for k in REDUCED_MEASURES}
+        return out
+
+    # ---------------------------------------------------------------- search
+    @property
+    def optimizing(self) -> bool:
+        """True while a search runs."""
+        t = self._search
+        return t is not None and t.is_alive()
+
+    def start_optimize(self, **overrides) -> bool:
+        """Run :func:`supportless.search.optimize` from the current pose in a background thread.
+
+        The search streams its best pose into the state (``"pose"`` events with
+        ``origin="search"``) and ends with the best pose it found, which
+        one undo takes back to the pose it started from.
+
+        Parameters
+        ----------
+        **overrides
+            Settings for this search only (``particles=20``, ``fix="1"``...);
+            by default :attr:`settings`, whose objective the panel shows.
+
+        Returns
+        -------
+        started : bool
+            False when a search is already running.
+
+        Raises
+        ------
+        ValueError
+            For invalid settings, or when every bone is fixed.
+        """
+        if self.optimizing:
+            return False
+        settings = self.settings.replace(**overrides)
+        fixed = settings.fixed_bones(self.rig)
+        if fixed.all():
+            raise ValueError("every bone is fixed: free some bones (e.g. Free bones: all)")
+        objective = self.objective if settings == self.settings else self._objective_for(settings)
+        self._cancel.clear()
+        with self._lock:
+            self.history.record(self._angles)
+            start = self._angles.copy()
+            self.progress = {"iteration": 0, "iterations": settings.iterations, "value": None,
+                             "running": True, "cancelled": False, "free_bones": int((~fixed).sum())}
+        self.search_settings = settings
+        self._search = threading.Thread(target=self._run_search, args=(settings, objective, start),
+                                        name="supportless-ui-search", daemon=True)
+        self._notify("search_started")
+        self._search.start()
+        return True
+
+    def _run_search(self, settings: SearchSettings, objective: Objective, start: np.ndarray) -> None:
+        def callback(iteration, info):
+            with self._lock:
+                self._angles = np.array(info["angles"], np.float64)
+                self.progress.update(iteration=iteration, value=float(info["value"]))
+            self._notify("pose", origin="search")
+            self._notify("progress")
+            return False if self._cancel.is_set() else None
+
+        try:
+            result = optimize(self.rig, settings, objective=objective, start=start, callback=callback)
+        except Exception as exc:  # noqa: BLE001 - reported to the listeners, the app keeps running
+            logger.exception("pose search failed")
+            with self._lock:
+                self.progress["running"] = False
+            self._notify("search_done", error=exc)
+            return
+        with self._lock:
+            self._angles = np.array(result.angles, np.float64)
+            self.last_result = result
+            self.progress.update(running=False, cancelled=bool(result.interrupted), value=result.value)
+        self._notify("pose", origin="search")
+        self._notify("search_done", result=result)
+
+    def cancel_optimize(self) -> None:
+        """Ask the running search to stop after its current iteration (it keeps its best pose)."""
+        self._cancel.set()
+
+    def wait_optimize(self, timeout: float | None = None) -> bool:
+        """Wait for the search thread; True when no search is running."""
+        t = self._search
+        if t is not None:
+            t.join(timeout)
+        return not self.optimizing
