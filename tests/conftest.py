@@ -1,13 +1,22 @@
-"""Shared fixtures: prepared rigs of the built-in figures, files on disk, shared models.
+"""Shared fixtures: prepared rigs of the built-in figures, files on disk, and what lies outside the package.
 
 The rigs are session-scoped so every test module reuses one preparation; they
 are cached under a per-session temporary folder, never in the user's cache.
-The shared test models (``../shared/data`` beside the repository) are optional:
-tests that need them skip with a visible reason when the folder is absent.
+
+Three things come from outside the Python package: the shared test models
+(``../shared/data`` beside the repository, or ``$SUPPORTLESS_SHARED_DATA``),
+PrusaSlicer (``prusa-slicer``, or ``$SUPPORTLESS_PRUSA_SLICER``) and Chromium
+(``chromium``, or ``$SUPPORTLESS_CHROMIUM``). Tests get them only through the
+fixtures :func:`shared_data`, :func:`shared_file`, :func:`prusa_slicer` and
+:func:`chromium`. When one is missing, those tests are skipped with the reason
+on a developer's machine, and fail with the reason under ``CI=true``, where
+everything must run. Pointing a variable at a missing path simulates its absence.
 """
 
 from __future__ import annotations
 
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +27,69 @@ import supportless as sl
 from meshes import box
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def in_ci() -> bool:
+    """True when ``$CI`` is set to anything but empty, ``0``, ``false`` or ``no``."""
+    return os.environ.get("CI", "").strip().lower() not in ("", "0", "false", "no")
+
+
+def unavailable(reason: str):
+    """Skip the test with ``reason``; under CI, fail it instead (nothing may be skipped there)."""
+    if in_ci():
+        pytest.fail(f"{reason} (CI requires it)", pytrace=False)
+    pytest.skip(reason)
+
+
+def _shared_data_dir() -> Path:
+    env = os.environ.get("SUPPORTLESS_SHARED_DATA", "").strip()
+    return Path(env).expanduser() if env else SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """The shared test models folder (``../shared/data``, or ``$SUPPORTLESS_SHARED_DATA``)."""
+    folder = _shared_data_dir()
+    if not folder.is_dir():
+        unavailable(f"shared test models not found: {folder} is missing")
+    return folder
+
+
+@pytest.fixture(scope="session")
+def shared_file(shared_data):
+    """A function ``name -> Path`` of one shared test model; missing files are treated like a missing folder."""
+
+    def get(name: str) -> Path:
+        path = shared_data / name
+        if not path.is_file():
+            unavailable(f"shared test model not found: {path} is missing")
+        return path
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def prusa_slicer() -> str:
+    """Path of the PrusaSlicer executable (:func:`supportless.slicer.find_prusa_slicer`)."""
+    from supportless.slicer import ENV_VAR, find_prusa_slicer
+
+    exe = find_prusa_slicer()
+    if exe is None:
+        where = os.environ.get(ENV_VAR, "").strip()
+        unavailable(f"PrusaSlicer not found{f' at ${ENV_VAR}={where}' if where else ' on PATH'}: "
+                    "apt-get install prusa-slicer")
+    return exe
+
+
+@pytest.fixture(scope="session")
+def chromium() -> str:
+    """Path of the Chromium executable for Playwright (``chromium`` on PATH, or ``$SUPPORTLESS_CHROMIUM``)."""
+    env = os.environ.get("SUPPORTLESS_CHROMIUM", "").strip()
+    exe = shutil.which(env) if env else (shutil.which("chromium") or shutil.which("chromium-browser"))
+    if exe is None:
+        unavailable(f"Chromium not found{f' at $SUPPORTLESS_CHROMIUM={env}' if env else ' on PATH'}: "
+                    "apt-get install chromium")
+    return exe
 
 
 @pytest.fixture(scope="session")
@@ -39,25 +111,15 @@ def tpose_rig(rig_cache_dir) -> sl.Rig:
 
 
 @pytest.fixture(scope="session")
-def shared_data() -> Path:
-    """``../shared/data`` relative to the repository root; skips when it is missing."""
-    if not SHARED_DATA.is_dir():
-        pytest.skip("../shared/data not present: shared test models are missing")
-    return SHARED_DATA
-
-
-@pytest.fixture(scope="session")
-def bunny_rig(shared_data) -> sl.Rig:
-    """The shared Stanford bunny rig.
+def bunny_rig(shared_file) -> sl.Rig:
+    """The shared Stanford bunny rig (``bunny.obj`` and ``bunny.tgf``).
 
     About 15 s to prepare cold, so it goes through the user's rig cache
     (``$SUPPORTLESS_CACHE`` or ``~/.cache/supportless``, keyed by a hash of the
     inputs): later sessions load it in a fraction of a second.
     """
-    path = shared_data / "bunny.obj"
-    if not path.is_file():
-        pytest.skip(f"{path} not present")
-    return sl.load_rig(path, up="y")
+    shared_file("bunny.tgf")
+    return sl.load_rig(shared_file("bunny.obj"), up="y")
 
 
 @pytest.fixture(scope="session")

@@ -273,11 +273,8 @@ def test_tgf_bones_in_any_order(tmp_path):
 
 
 @pytest.mark.parametrize("name, joints, bones", [("bunny", 12, 11), ("bb-bunny", 13, 12), ("woody", 9, 8)])
-def test_shared_tgf_files(shared_data, name, joints, bones):
-    path = shared_data / f"{name}.tgf"
-    if not path.is_file():
-        pytest.skip(f"{path} not present")
-    J, B = sl.read_tgf(path)
+def test_shared_tgf_files(shared_file, name, joints, bones):
+    J, B = sl.read_tgf(shared_file(f"{name}.tgf"))
     assert J.shape == (joints, 3) and B.shape == (bones, 2)
     assert B.min() >= 0 and B.max() < joints
     assert (sl.kinematics.bone_parents(B) < 0).sum() >= 1

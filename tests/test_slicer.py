@@ -322,14 +322,6 @@ def test_bad_mesh_arrays_are_input_errors_before_slicing(tmp_path, posed, fragme
 # ---------------------------------------------------------------------------
 
 
-@pytest.fixture
-def prusa():
-    exe = find_prusa_slicer()
-    if exe is None:
-        pytest.skip("PrusaSlicer not installed: apt-get install prusa-slicer")
-    return exe
-
-
 def _gamma_mesh():
     """A post (along +Y) with a horizontal arm at the top sticking out along +X."""
     import trimesh
@@ -345,7 +337,7 @@ def _gamma_mesh():
     return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
 
 
-def test_arm_up_needs_less_support_than_arm_out(prusa):
+def test_arm_up_needs_less_support_than_arm_out(prusa_slicer):
     V, F = _gamma_mesh()
     # +90 deg about Z: the arm (+X) now points up (+Y), the post lies on the bed
     Rz = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
@@ -361,7 +353,7 @@ def test_arm_up_needs_less_support_than_arm_out(prusa):
     assert d["before"]["support_mm"] == pytest.approx(r.support_mm_before)
 
 
-def test_plain_box_needs_no_support(prusa):
+def test_plain_box_needs_no_support(prusa_slicer):
     box = _box_vf()
     r = slice_check(box, box, up=(0, 0, 1), height_mm=15.0, config="fast", timeout=120)
     assert r.model_mm_before > 100.0
@@ -370,7 +362,7 @@ def test_plain_box_needs_no_support(prusa):
     assert abs(r.support_mm_after) <= 1e-3 * r.model_mm_before, r.to_dict()
 
 
-def test_accepts_mesh_paths(prusa, tmp_path):
+def test_accepts_mesh_paths(prusa_slicer, tmp_path):
     import supportless
 
     V, F = _gamma_mesh()
@@ -395,9 +387,7 @@ def _demo_meshes(tmp_path):
     return tmp_path / "rest.stl", tmp_path / "posed.stl"
 
 
-def test_cli_slice_check_on_the_demo_figure(tmp_path):
-    if find_prusa_slicer() is None:
-        pytest.skip("PrusaSlicer not installed: apt-get install prusa-slicer")
+def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     from click.testing import CliRunner
 
     from supportless.cli import main
