@@ -14,16 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import unavailable
 from supportless import io as sio
 from supportless.errors import InputError
 from supportless.rig import load_rig
 from supportless.settings import SearchSettings
+from supportless.ui import App, find_free_port
 
-pytest.importorskip("viser")
-
-from supportless.ui import App, find_free_port  # noqa: E402
-
-CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
 
 
@@ -109,17 +106,12 @@ def test_undo_redo_reset(app, rig):
 
 def test_gizmo_drag_becomes_relative_euler_angles_and_one_undo_step(app, rig):
     from supportless.kinematics import euler_to_matrix
+    from test_ui_state import gizmo_turn
 
     app.reset()
-    child = int(np.flatnonzero(rig.parents >= 0)[-1])
-    parent = int(rig.parents[child])
-    target = np.zeros((rig.bone_count, 3))
-    target[parent] = np.radians([10.0, -20.0, 15.0])
-    target[child] = np.radians([25.0, 30.0, -40.0])
-    before = np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target)
+    child, before, target, world = gizmo_turn(rig)
     app.state.set_angles(before)
     app.state.select_bone(child)
-    world = rig.transforms(target)[parent][:, :3] @ euler_to_matrix(target[child])
     app._on_gizmo("start", np.eye(3))
     for k in (0.3, 0.7, 1.0):  # the drag's last position is the target
         app._on_gizmo("update", world if k == 1.0 else euler_to_matrix(k * target[child]))
@@ -131,11 +123,8 @@ def test_gizmo_drag_becomes_relative_euler_angles_and_one_undo_step(app, rig):
     assert app.wait_idle()
 
 
-def test_planar_rig(tmp_path):
-    try:
-        rig2 = load_rig("demo:woody2d")
-    except (ImportError, KeyError):
-        pytest.skip("no 2D demo figure (supportless.shapes)")
+def test_planar_rig(tmp_path, rig_cache_dir):
+    rig2 = load_rig("demo:woody2d", cache_dir=rig_cache_dir)
     a = App(rig2, verbose=False, workdir=tmp_path)
     try:
         assert a.wait_idle(60)
@@ -260,13 +249,11 @@ def test_panel_shows_the_objective_its_search_minimises(app, rig):
 # --------------------------------------------------------------------------- #
 # the page in a real browser
 # --------------------------------------------------------------------------- #
-def _browser():
-    if not CHROMIUM.exists():
-        pytest.skip(f"Chromium not found at {CHROMIUM}: apt-get install chromium")
+def _playwright():
     try:
         from playwright.sync_api import sync_playwright
     except ImportError:
-        pytest.skip("playwright is not installed: pip install playwright (no browser download needed)")
+        unavailable("playwright is not installed: pip install playwright (no browser download needed)")
     return sync_playwright
 
 
@@ -276,14 +263,14 @@ def _number(text: str, label: str) -> float:
     return float(m.group(1))
 
 
-def test_page_in_chromium(rig, tmp_path):
-    sync_playwright = _browser()
+def test_page_in_chromium(rig, tmp_path, chromium):
+    sync_playwright = _playwright()
     app = App(rig, verbose=False, workdir=tmp_path)
     errors: list[str] = []
     try:
         with sync_playwright() as p:
             browser = p.chromium.launch(
-                executable_path=str(CHROMIUM),
+                executable_path=chromium,
                 args=["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
                       "--disable-background-networking"])
             page = browser.new_page(viewport={"width": 1400, "height": 900})

@@ -1,0 +1,268 @@
+"""The viewer's editing state (supportless.ui.state) without a browser, a server or viser."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from supportless import io as sio
+from supportless.errors import SupportlessError
+from supportless.kinematics import euler_to_matrix
+from supportless.search import optimize
+from supportless.settings import SearchSettings
+from supportless.ui.state import EditorState
+
+
+@pytest.fixture()
+def state(branch_rig, tmp_path):
+    s = EditorState(branch_rig, workdir=tmp_path)
+    yield s
+    s.cancel_optimize()
+    s.wait_optimize(60)
+
+
+def _events(state):
+    seen = []
+    state.subscribe(lambda event, **info: seen.append((event, info)))
+    return seen
+
+
+def test_needs_no_viser():
+    import subprocess
+    import sys
+
+    code = ("import sys; import supportless.ui.state; "
+            "assert 'viser' not in sys.modules, 'the editing state imported viser'")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_set_angles_and_select_bone(state, branch_rig):
+    seen = _events(state)
+    m = branch_rig.bone_count
+    state.set_bone_angles(m - 1, [10.0, 0.0, -20.0])
+    assert np.allclose(np.degrees(state.get_angles()[m - 1]), [10, 0, -20])
+    assert np.allclose(state.get_angles()[: m - 1], 0.0)
+    assert seen[-1] == ("pose", {"origin": None})
+    state.get_angles()[:] = 1.0  # a copy: the state does not change
+    assert np.allclose(state.get_angles()[: m - 1], 0.0)
+    with pytest.raises(ValueError, match="the rig needs"):
+        state.set_angles(np.zeros((m + 1, 3)))
+    state.select_bone(m - 1)
+    assert state.selected == m - 1 and seen[-1][0] == "selection"
+    with pytest.raises(ValueError, match="out of range"):
+        state.select_bone(m)
+
+
+def test_undo_redo_reset(state, branch_rig):
+    b = branch_rig.bone_count - 1
+    assert not state.undo() and not state.redo()  # nothing yet
+    state.set_bone_angles(b, [10.0, 0.0, 0.0], key="a")
+    state.set_bone_angles(b, [10.0, 20.0, 0.0], key="b")  # another control: another step
+    assert state.undo()
+    assert np.allclose(np.degrees(state.get_angles()[b]), [10, 0, 0])
+    assert state.undo()
+    assert np.allclose(state.get_angles(), 0.0)
+    assert not state.undo()
+    assert state.redo()
+    assert np.allclose(np.degrees(state.get_angles()[b]), [10, 0, 0])
+    state.reset()
+    assert np.allclose(state.get_angles(), 0.0)
+    assert state.undo()  # reset is an undo step
+    assert np.allclose(np.degrees(state.get_angles()[b]), [10, 0, 0])
+    for v in range(11, 30):  # one slider dragged: one step
+        state.set_bone_angles(b, [v, 0.0, 0.0], key=("slider", b, 0))
+    assert state.undo()
+    assert np.allclose(np.degrees(state.get_angles()[b]), [10, 0, 0])
+
+
+def gizmo_turn(rig):
+    """A child bone turned under a turned parent, as the gizmo would show it.
+
+    Returns
+    -------
+    child : int
+    before : (m, 3) float64
+        The pose with the child not yet turned.
+    target : (m, 3) float64
+        The pose with it turned.
+    world : (3, 3) float64
+        The child's rotation in the world in ``target``.
+    """
+    child = int(np.flatnonzero(rig.parents >= 0)[-1])
+    parent = int(rig.parents[child])
+    target = np.zeros((rig.bone_count, 3))
+    target[parent] = np.radians([10.0, -20.0, 15.0])
+    target[child] = np.radians([25.0, 30.0, -40.0])
+    before = np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target)
+    world = rig.transforms(target)[parent][:, :3] @ euler_to_matrix(target[child])
+    return child, before, target, world
+
+
+def test_world_rotation_becomes_relative_euler_angles(state, branch_rig):
+    child, before, target, world = gizmo_turn(branch_rig)
+    state.set_angles(before)
+    state.set_bone_rotation(child, world)
+    assert np.allclose(state.get_angles(), target, atol=1e-12)
+
+
+def test_save_then_load_a_pose_file(state, branch_rig, tmp_path):
+    state.set_bone_angles(branch_rig.bone_count - 1, [5.0, -10.0, 25.0])
+    target = state.get_angles()
+    payload = state.pose_bytes()
+    path = state.save_pose("pose.json")  # relative to the work folder
+    assert path == tmp_path / "pose.json"
+    data = json.loads(path.read_text())
+    assert data["objective"] == pytest.approx(float(state.objective(target)))
+    assert data["settings"]["overhang_angle"] == state.settings.overhang_angle
+    state.reset()
+    assert state.load_pose(path) == path
+    assert np.array_equal(state.get_angles(), target)
+    assert state.undo() and np.allclose(state.get_angles(), 0.0)  # loading is an undo step
+    state.reset()
+    state.load_pose_bytes("uploaded.json", payload)  # a file sent from the browser
+    assert np.array_equal(state.get_angles(), target)
+
+
+def test_bad_pose_files_raise_and_keep_the_pose(state, branch_rig, tmp_path):
+    state.set_bone_angles(0, [0, 0, 5.0])
+    before = state.get_angles()
+    other = tmp_path / "other.json"
+    sio.write_pose(other, np.zeros((5, 3)), np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]]))
+    with pytest.raises(SupportlessError, match="skeleton"):
+        state.load_pose(other)
+    (tmp_path / "junk.json").write_text("{not json")
+    with pytest.raises(SupportlessError, match="not a pose file"):
+        state.load_pose("junk.json")
+    with pytest.raises(SupportlessError, match="no such file"):
+        state.load_pose("missing.json")
+    with pytest.raises(ValueError):
+        state.load_pose_bytes("x.json", b"\x00\x01")
+    assert np.array_equal(state.get_angles(), before)
+
+
+def test_export_mesh_file_and_bytes_on_the_plate(state, branch_rig, tmp_path):
+    import trimesh
+
+    state.set_bone_angles(0, [0, 0, 30.0])
+    for ext in ("stl", "3mf", "obj"):
+        p = state.export_mesh(tmp_path / f"posed.{ext}")
+        m = trimesh.load(p, force="mesh")
+        assert len(m.faces) == len(branch_rig.faces)
+        assert float((m.vertices @ branch_rig.up).min()) == pytest.approx(0.0, abs=1e-5)
+    assert np.allclose(state.posed_on_plate(), trimesh.load(tmp_path / "posed.obj", force="mesh", process=False)
+                       .vertices, atol=1e-5)
+    assert state.mesh_bytes("stl") == (tmp_path / "posed.stl").read_bytes()
+    with pytest.raises(SupportlessError, match="unknown output format"):
+        state.export_mesh(tmp_path / "posed.xyz")
+
+
+def test_measures_follow_the_pose(state, branch_rig):
+    rest = state.measure()
+    assert rest["reduction"]["overhang_prism"] == pytest.approx(0.0, abs=1e-9)
+    assert rest["risky"].shape == (len(branch_rig.faces),)
+    assert rest["intersecting_face_pairs"] == len(rest["intersecting_faces"]) == 0
+    state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 40.0])
+    moved = state.measure()
+    assert moved["objective"] != pytest.approx(rest["objective"])
+    assert moved["terms"]["arap"] > rest["terms"]["arap"]
+    assert moved["overhang_prism"] != pytest.approx(rest["overhang_prism"])
+    assert moved["reduction"]["overhang_prism"] != pytest.approx(0.0)
+    assert state.measure(exact=False)["intersecting_faces"] is None  # not checked
+
+
+def test_measured_objective_is_the_one_the_search_minimises(state, branch_rig):
+    """The panel's objective: SearchSettings(...).objective(rig), the value optimize reports for the pose."""
+    rig = branch_rig
+    state.set_bone_angles(rig.bone_count - 1, [10.0, -5.0, 35.0])
+    pose = state.get_angles()
+    for changes in ({}, {"w_overhang": 3.0, "overhang_angle": 50.0}, {"overhang_margin": 0.0, "w_arap": 0.5}):
+        settings = SearchSettings(**changes)
+        state.update_settings(**dataclasses.asdict(settings))
+        assert state.settings == settings
+        expected = float(settings.objective(rig)(pose))
+        measured = state.measure(pose)
+        assert measured["objective"] == pytest.approx(expected, rel=1e-12)
+        assert measured["overhang_angle"] == settings.overhang_angle  # supports at the printer's threshold
+        assert state.objective.overhang_angle == settings.search_overhang_angle
+        # the value the search reports for this very pose (no bone free: the start pose is the result)
+        result = optimize(rig, settings, start=pose, fix="all", iterations=0)
+        assert np.array_equal(result.angles, pose)
+        assert result.value == pytest.approx(measured["objective"], rel=1e-12)
+
+
+def test_settings_share_the_distortion_operators(state):
+    arap = state.objective.arap_data
+    state.update_settings(w_overhang=2.0, overhang_angle=40.0)
+    assert state.objective.arap_data is arap
+    same = state.objective
+    state.update_settings(particles=7, seed=3)  # search-only settings keep the objective
+    assert state.objective is same
+
+
+def test_invalid_bone_list_is_a_clear_error(state, branch_rig):
+    before = state.settings
+    with pytest.raises(ValueError, match=r"bone 99 is out of range 1\.\.3"):
+        state.update_settings(fix="99")
+    with pytest.raises(ValueError, match="'hand' is not a bone number"):
+        state.update_settings(free="1, hand")
+    assert state.settings == before
+    with pytest.raises(ValueError, match="out of range"):
+        state.start_optimize(free="0")
+    with pytest.raises(ValueError, match="every bone is fixed"):
+        state.start_optimize(fix="all")
+    assert not state.optimizing
+    state.update_settings(fix="1", free="")
+    assert state.fixed[0] and state.settings.fix == ("1",)
+
+
+def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
+    seen = _events(state)
+    state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 10.0])
+    start = state.get_angles()
+    start_value = float(state.objective(start))
+    assert state.start_optimize(particles=10, iterations=4, seed=2)
+    assert not state.start_optimize()  # one search at a time
+    assert state.wait_optimize(300)
+    result = state.last_result
+    assert result is not None and not result.interrupted
+    assert result.value <= start_value + 1e-12  # never worse than where it started
+    assert np.array_equal(state.get_angles(), result.angles)
+    assert state.progress == {"iteration": 4, "iterations": 4, "value": result.value, "running": False,
+                              "cancelled": False, "free_bones": int((~state.fixed).sum())}
+    assert state.search_settings.particles == 10 and state.settings.particles == SearchSettings().particles
+    events = [e for e, _ in seen]
+    assert events[0] == "pose" and events[1] == "search_started" and events[-1] == "search_done"
+    assert events.count("progress") == 4
+    assert ("pose", {"origin": "search"}) in seen
+    assert state.undo()
+    assert np.array_equal(state.get_angles(), start)
+    # a long search stops when cancelled and keeps its best pose
+    assert state.start_optimize(particles=8, iterations=100000)
+    state.cancel_optimize()
+    assert state.wait_optimize(120)
+    assert state.last_result.interrupted and state.progress["cancelled"]
+
+
+def test_planar_rig_turns_about_the_plane_normal(rig_cache_dir, tmp_path):
+    from supportless.energies.surface import boundary_edges
+    from supportless.kinematics import planar_rotation
+    from supportless.rig import load_rig
+
+    rig = load_rig("demo:woody2d", cache_dir=rig_cache_dir)
+    state = EditorState(rig, workdir=tmp_path)
+    child = int(np.flatnonzero(rig.parents >= 0)[-1])
+    parent = int(rig.parents[child])
+    target = np.zeros((rig.bone_count, 3))
+    target[parent, 2], target[child, 2] = 0.4, -0.7
+    world = np.eye(3)
+    world[:2, :2] = rig.transforms(target)[parent][:, :2] @ planar_rotation(-0.7)
+    state.set_angles(np.where(np.arange(rig.bone_count)[:, None] == child, 0.0, target))
+    state.set_bone_rotation(child, world)
+    assert np.allclose(state.get_angles(), target, atol=1e-12)
+    m = state.measure()
+    assert m["risky"].shape == (len(boundary_edges(rig.faces)),)  # one flag per boundary edge
+    assert m["intersecting_faces"] is None and "intersecting_face_pairs" not in m
+    assert state.export_mesh("flat.obj").is_file()
