@@ -54,6 +54,14 @@ def test_taken_port_is_a_clear_error_and_default_picks_a_free_one(rig):
             App(rig, port=busy, verbose=False)
 
 
+def test_page_url():
+    from supportless.ui.ports import page_url
+
+    assert page_url("127.0.0.1", 8080) == "http://127.0.0.1:8080"
+    assert page_url("0.0.0.0", 8081) == "http://localhost:8081"
+    assert page_url("::1", 8082) == "http://[::1]:8082"
+
+
 def test_app_serves_on_localhost_only(app):
     assert app.url == f"http://127.0.0.1:{app.port}"
     assert app.server.get_host() == "127.0.0.1"

@@ -27,11 +27,11 @@ import numpy as np
 from ..errors import SupportlessError
 from ..settings import SearchSettings
 from .panel import Panel, measures_markdown
-from .ports import find_free_port, page_url, start_server
+from .ports import page_url, start_server
 from .scene import Scene
 from .state import EditorState
 
-__all__ = ["App", "find_free_port", "run_app"]
+__all__ = ["App", "run_app"]
 
 logger = logging.getLogger("supportless.ui")
 

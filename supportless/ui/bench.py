@@ -16,6 +16,8 @@ import time
 
 import numpy as np
 
+__all__ = ["browser_latency", "main", "server_latency"]
+
 
 def server_latency(app, edits: int = 40, bone: int | None = None) -> dict:
     """Median and max latencies (ms) of ``edits`` single-angle edits, one at a time."""

@@ -11,6 +11,8 @@ import time
 
 import numpy as np
 
+__all__ = ["PoseHistory"]
+
 
 class PoseHistory:
     """Undo and redo stacks of ``(m, 3)`` angle arrays.

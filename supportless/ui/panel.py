@@ -12,6 +12,7 @@ import numpy as np
 
 from ..objective import OVERHANG_MODELS
 from ..settings import SearchSettings
+from .scene import MESH_OPACITY
 
 __all__ = ["NUMBER_SETTINGS", "Panel", "measures_markdown"]
 
@@ -80,6 +81,16 @@ class Panel:
     gui : viser.GuiApi
     app : supportless.ui.app.App
         Receives the actions (``undo``, ``start_optimize``, ``save_pose``...).
+
+    Attributes
+    ----------
+    settings : dict of str -> viser GUI handle
+        The search-settings widgets, by :class:`SearchSettings` field.
+    invalid : dict of str -> str
+        Settings whose value in the panel the state refused, and why.
+    status, measures, bone_info, fixed_info, search_info : viser markdown handles
+    sliders : list of viser slider handles
+        X, Y, Z angle of the selected bone, degrees.
     """
 
     def __init__(self, gui, app):
@@ -114,7 +125,7 @@ class Panel:
             show_risky = g.add_checkbox("Show risky faces", True)
             weights = g.add_checkbox("Colour by bone weights", False,
                                      hint="Colour the mesh by the selected bone's skinning weights")
-            opacity = g.add_slider("Mesh opacity", min=0.1, max=1.0, step=0.05, initial_value=0.55)
+            opacity = g.add_slider("Mesh opacity", min=0.1, max=1.0, step=0.05, initial_value=MESH_OPACITY)
             self.bone_info = g.add_markdown("")
 
         @self.bone.on_update

@@ -445,7 +445,7 @@ class EditorState:
         fixed = settings.fixed_bones(self.rig)
         if fixed.all():
             raise ValueError("every bone is fixed: free some bones (e.g. Free bones: all)")
-        objective = self.objective if settings == self.settings else self._objective_for(settings)
+        objective = self._objective_for(settings)
         self._cancel.clear()
         with self._lock:
             self.history.record(self._angles)
