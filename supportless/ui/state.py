@@ -105,6 +105,7 @@ class EditorState:
         self.workdir = Path(workdir) if workdir is not None else Path.cwd()
         self.history = PoseHistory()
         self._lock = threading.RLock()
+        self._settings_lock = threading.Lock()
         self._angles = rig.rest_angles()
         self._selected = 0
         self._listeners: list[Callable] = []
@@ -354,14 +355,15 @@ class EditorState:
             For an invalid value, e.g. a bone list naming a bone the rig does
             not have; the settings stay as they were.
         """
-        new = self.settings.replace(**changes)
-        fixed = new.fixed_bones(self.rig)
-        objective = self._objective_for(new)
-        rest = self.rest_measures
-        if objective is not self.objective or new.overhang_angle != self.settings.overhang_angle:
-            rest = self._measure(objective, new, self.rig.rest_angles(), exact=False)
-        with self._lock:
-            self.settings, self.fixed, self.objective, self.rest_measures = new, fixed, objective, rest
+        with self._settings_lock:  # one change at a time; the pose stays readable meanwhile
+            new = self.settings.replace(**changes)
+            fixed = new.fixed_bones(self.rig)
+            objective = self._objective_for(new)
+            rest = self.rest_measures
+            if objective is not self.objective or new.overhang_angle != self.settings.overhang_angle:
+                rest = self._measure(objective, new, self.rig.rest_angles(), exact=False)
+            with self._lock:
+                self.settings, self.fixed, self.objective, self.rest_measures = new, fixed, objective, rest
         self._notify("settings")
         return new
 
