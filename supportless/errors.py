@@ -3,12 +3,16 @@
 Every error a user can cause (a bad file, a bad option) is raised as an
 :class:`InputError` whose message is one line: which file, what is wrong and
 what to do. The command line prints that line and exits non-zero; it never
-shows a traceback for these.
+shows a traceback for these. Failures of an outside tool have their own
+subclasses of :class:`SupportlessError` in the module that runs the tool
+(:class:`supportless.slicer.SlicerError` for PrusaSlicer).
 """
 
 from __future__ import annotations
 
 import os
+
+__all__ = ["InputError", "SupportlessError"]
 
 
 class SupportlessError(Exception):

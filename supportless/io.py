@@ -69,13 +69,26 @@ def _umask() -> int:
 
 
 def write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` atomically (temporary file, then rename)."""
+    """Write text to a file atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    text : str
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(text)
 
 
 def write_json(path: str | os.PathLike, data) -> None:
-    """Write ``data`` as indented JSON to ``path`` atomically."""
+    """Write data as indented JSON, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    data : object
+        JSON values; numpy arrays and scalars and paths are converted.
+    """
     write_text(path, json.dumps(data, indent=2, default=_json_default) + "\n")
 
 
@@ -383,6 +396,7 @@ def write_tgf(path: str | os.PathLike, joints: np.ndarray, bones: np.ndarray) ->
 
     Parameters
     ----------
+    path : str or os.PathLike
     joints : (j, 2) or (j, 3) float64
         Planar joints are written with z = 0.
     bones : (m, 2) int64
@@ -404,10 +418,20 @@ def write_tgf(path: str | os.PathLike, joints: np.ndarray, bones: np.ndarray) ->
 def read_tet_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     """Read a tetrahedral mesh in libigl/Medit ``.mesh`` format.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+
     Returns
     -------
     V : (t, 3) float64
     T : (k, 4) int64
+        0-based vertex indices.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, no tetrahedra, indices out of range.
     """
     import igl
 
@@ -428,7 +452,17 @@ def read_tet_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
 
 
 def write_tet_mesh(path: str | os.PathLike, V: np.ndarray, T: np.ndarray, F: np.ndarray | None = None) -> None:
-    """Write a tetrahedral mesh as ``.mesh``, atomically."""
+    """Write a tetrahedral mesh as ``.mesh``, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    V : (t, 3) float64
+    T : (k, 4) int64
+        0-based.
+    F : (f, 3) int64, optional
+        Boundary triangles to store with them.
+    """
     import igl
 
     F = np.zeros((0, 3), np.int64) if F is None else np.asarray(F, np.int64)
@@ -448,6 +482,11 @@ def read_dmat(path: str | os.PathLike, shape: tuple[int | None, int | None] | No
     Returns
     -------
     M : (rows, cols) float64
+
+    Raises
+    ------
+    InputError
+        Missing file, not an ASCII ``.dmat``, or not the expected shape.
     """
     path = Path(path)
     if not path.is_file():
@@ -473,7 +512,14 @@ def read_dmat(path: str | os.PathLike, shape: tuple[int | None, int | None] | No
 
 
 def write_dmat(path: str | os.PathLike, M: np.ndarray) -> None:
-    """Write a dense matrix as ASCII ``.dmat`` (column-major), atomically."""
+    """Write a dense matrix as ASCII ``.dmat`` (column-major, ``%.17g``: exact), atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    M : (rows, cols) float64
+        A 1-D array is written as one row.
+    """
     M = np.atleast_2d(np.asarray(M, np.float64))
     body = "\n".join(f"{x:.17g}" for x in M.T.ravel())
     write_text(path, f"{M.shape[1]} {M.shape[0]}\n{body}\n")
@@ -491,6 +537,7 @@ def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, j
 
     Parameters
     ----------
+    path : str or os.PathLike
     angles : (m, 3) float64
         Radians, XYZ Euler angles per bone (see :mod:`supportless.kinematics`).
     bones : (m, 2) int64

@@ -40,6 +40,21 @@ _DPI = 100
 # ---------------------------------------------------------------------------
 
 def _unit(v):
+    """``v`` scaled to length 1.
+
+    Parameters
+    ----------
+    v : array_like, shape (d,)
+
+    Returns
+    -------
+    numpy.ndarray, shape (d,), dtype float64
+
+    Raises
+    ------
+    ValueError
+        For a zero or non-finite vector.
+    """
     v = np.asarray(v, dtype=np.float64)
     n = np.linalg.norm(v)
     if not np.isfinite(n) or n == 0.0:
@@ -48,7 +63,7 @@ def _unit(v):
 
 
 def _parse_camera(camera):
-    """Return ``(azimuth, elevation)`` in degrees from a camera spec."""
+    """``(azimuth, elevation)`` in degrees from ``{"azimuth", "elevation"}``, a pair, or None (the default)."""
     if camera is None:
         camera = _DEFAULT_CAMERA
     if isinstance(camera, dict):
@@ -128,6 +143,17 @@ def view_bounds(*vertex_arrays):
 
 
 def _box_corners(bounds):
+    """The ``2**d`` corners of a box.
+
+    Parameters
+    ----------
+    bounds : numpy.ndarray, shape (2, d), dtype float64
+        ``[min corner, max corner]``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2**d, d), dtype float64
+    """
     lo, hi = np.asarray(bounds, dtype=np.float64)
     d = len(lo)
     idx = np.array(np.meshgrid(*[[0, 1]] * d, indexing="ij")).reshape(d, -1).T
@@ -135,6 +161,7 @@ def _box_corners(bounds):
 
 
 def _nice_step(extent):
+    """A 1, 2 or 5 times a power of ten grid step giving about 8 lines across ``extent``."""
     raw = extent / 8.0
     p = 10.0 ** math.floor(math.log10(raw))
     for m in (1.0, 2.0, 5.0, 10.0):
@@ -144,7 +171,23 @@ def _nice_step(extent):
 
 
 def _screen_limits(bounds, up, camera, aspect):
-    """Screen rectangle (xmin, xmax, ymin, ymax) framing ``bounds``."""
+    """The screen rectangle framing a box (and, in 3D, its plate).
+
+    Parameters
+    ----------
+    bounds : numpy.ndarray, shape (2, d), dtype float64
+        World box to frame.
+    up : array_like, shape (d,)
+    camera : dict or tuple or None
+        See :func:`_view_frame`.
+    aspect : float
+        Width / height of the axes in pixels.
+
+    Returns
+    -------
+    xmin, xmax, ymin, ymax : float
+        Screen coordinates, with a 2 % margin and the given aspect ratio.
+    """
     lo, hi = np.asarray(bounds, dtype=np.float64)
     dim = len(lo)
     right, sup, _, u, e1, e2 = _view_frame(up, camera, dim)
@@ -172,6 +215,21 @@ def _screen_limits(bounds, up, camera, aspect):
 # ---------------------------------------------------------------------------
 
 def _face_base_colors(n_faces, face_colors, risky, default):
+    """Unshaded RGB colour of every face.
+
+    Parameters
+    ----------
+    n_faces : int
+    face_colors : numpy.ndarray, shape (f, 3) or (f, 4) or (3,), or None
+        RGB(A) in [0, 1] or [0, 255]; None gives ``default`` everywhere.
+    risky : numpy.ndarray, shape (f,), dtype bool, or None
+        Faces painted red.
+    default : numpy.ndarray, shape (3,), dtype float64
+
+    Returns
+    -------
+    numpy.ndarray, shape (f, 3), dtype float64
+    """
     if face_colors is None:
         base = np.tile(default, (n_faces, 1))
     else:
@@ -217,12 +275,25 @@ def _plate_rect(bounds, u, e1, e2, h0, margin=0.12):
 
 
 def _plate_corners(origin, lim, e1, e2):
+    """The 4 corners, shape (4, 3), of the plate rectangle from :func:`_plate_rect`."""
     return np.array([origin + a * e1 + b * e2
                      for a, b in ((lim[0, 0], lim[1, 0]), (lim[0, 1], lim[1, 0]),
                                   (lim[0, 1], lim[1, 1]), (lim[0, 0], lim[1, 1]))])
 
 
 def _draw_plate(ax, V, u, e1, e2, right, sup, bounds):
+    """Draw the build plate and its grid under a 3D mesh.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    V : numpy.ndarray, shape (n, 3), dtype float64
+        The plate is at its lowest point along ``u``.
+    u, e1, e2, right, sup : numpy.ndarray, shape (3,), dtype float64
+        Up, the plate axes and the screen axes (from :func:`_view_frame`).
+    bounds : numpy.ndarray, shape (2, 3), dtype float64
+        The framed box, whose footprint the plate covers.
+    """
     h0 = float((V @ u).min())
     origin, lim, step = _plate_rect(bounds, u, e1, e2, h0)
     quad = _plate_corners(origin, lim, e1, e2)
@@ -242,6 +313,16 @@ def _draw_plate(ax, V, u, e1, e2, right, sup, bounds):
 
 
 def _draw_skeleton(ax, joints, bones, right, sup):
+    """Draw bones as lines and joints as dots, above the mesh.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    joints : numpy.ndarray, shape (j, d), dtype float64
+    bones : numpy.ndarray, shape (m, 2), dtype int64, or None
+    right, sup : numpy.ndarray, shape (d,), dtype float64
+        Screen axes.
+    """
     J = np.asarray(joints, dtype=np.float64)
     P = np.c_[J @ right, J @ sup]
     if bones is not None and len(bones):
@@ -256,6 +337,11 @@ def _draw_skeleton(ax, joints, bones, right, sup):
 
 def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
                title, camera, bounds, aspect):
+    """Draw one mesh panel; the arguments are those of :func:`render_mesh`.
+
+    ``aspect`` is the panel's width / height in pixels; ``bounds`` None frames
+    the mesh (and joints) alone.
+    """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
     if V.ndim != 2 or V.shape[1] not in (2, 3):
@@ -315,6 +401,7 @@ def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
 
 
 def _save_atomic(fig, path):
+    """Save ``fig`` as PNG through :func:`supportless.io.atomic_path`; return ``path`` as str."""
     from .io import atomic_path
 
     with atomic_path(path) as tmp:
@@ -323,6 +410,7 @@ def _save_atomic(fig, path):
 
 
 def _new_figure(size):
+    """A white Agg figure of ``size = (width, height)`` pixels."""
     w, h = (int(s) for s in size)
     if w <= 0 or h <= 0:
         raise ValueError("size must be positive")
@@ -330,6 +418,7 @@ def _new_figure(size):
 
 
 def _panel_axes(fig, rect, has_title):
+    """Axes filling ``rect = (x, y, w, h)`` in figure fractions, leaving 7 % on top for a title."""
     x, y, w, h = rect
     if has_title:
         h = h * 0.93

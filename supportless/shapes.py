@@ -83,7 +83,20 @@ def _sd_ellipsoid(p, c, r):
 
 
 def _smin(a, b, k):
-    """Polynomial smooth minimum of two distances with blend radius ``k``."""
+    """Polynomial smooth minimum of two distances.
+
+    Parameters
+    ----------
+    a, b : float
+        Signed distances.
+    k : float
+        Blend radius; 0 or less gives the plain minimum.
+
+    Returns
+    -------
+    float
+        At most ``min(a, b)``, by up to ``k / 4`` where ``|a - b| < k``.
+    """
     if k <= 0.0:
         return min(a, b)
     h = max(k - abs(a - b), 0.0) / k
@@ -160,7 +173,15 @@ def _compact(V, F):
 # ---------------------------------------------------------------------------
 
 def _tpose():
-    """Humanoid standing upright with both arms held out horizontally."""
+    """Humanoid standing upright with both arms held out horizontally.
+
+    Returns
+    -------
+    V : numpy.ndarray, shape (n, 3), dtype float64
+    F : numpy.ndarray, shape (f, 3), dtype int64
+    joints : numpy.ndarray, shape (16, 3), dtype float64
+    bones : numpy.ndarray, shape (15, 2), dtype int64
+    """
     J = {
         "hips": (0.0, 30.0, 0.0),
         "chest": (0.0, 40.0, 0.0),
@@ -221,7 +242,15 @@ def _tpose():
 # ---------------------------------------------------------------------------
 
 def _branch():
-    """Upright post on a round foot with one horizontal cantilevered arm."""
+    """Upright post on a round foot with one horizontal cantilevered arm.
+
+    Returns
+    -------
+    V : numpy.ndarray, shape (n, 3), dtype float64
+    F : numpy.ndarray, shape (f, 3), dtype int64
+    joints : numpy.ndarray, shape (4, 3), dtype float64
+    bones : numpy.ndarray, shape (3, 2), dtype int64
+    """
     joints = np.array([
         [0.0, 2.0, 0.0],    # 0 base (root)
         [0.0, 20.0, 0.0],   # 1 branching point
@@ -243,7 +272,23 @@ def _branch():
 # ---------------------------------------------------------------------------
 
 def _woody2d(samples_per_bone=5, max_area=1.5):
-    """Planar stick figure triangulated with vertices on every bone."""
+    """Planar stick figure triangulated with vertices on every bone.
+
+    Parameters
+    ----------
+    samples_per_bone : int
+        Interior vertices forced onto each bone.
+    max_area : float
+        Largest triangle area.
+
+    Returns
+    -------
+    V : numpy.ndarray, shape (n, 2), dtype float64
+    F : numpy.ndarray, shape (f, 3), dtype int64
+        Counter-clockwise triangles.
+    joints : numpy.ndarray, shape (12, 2), dtype float64
+    bones : numpy.ndarray, shape (11, 2), dtype int64
+    """
     from .tetmesh import triangulate_planar
     import manifold3d
 
@@ -350,6 +395,7 @@ _BUILDERS = {"tpose": _tpose, "branch": _branch, "woody2d": _woody2d}
 
 @functools.lru_cache(maxsize=None)
 def _cached(name):
+    """The built figure ``name``, built once per process, as read-only arrays."""
     V, F, joints, bones = _BUILDERS[name]()
     for a in (V, F, joints, bones):
         a.setflags(write=False)

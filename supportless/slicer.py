@@ -350,6 +350,8 @@ def _config_args(config: Mapping[str, str]) -> list[str]:
 
 @dataclass
 class _Job:
+    """One PrusaSlicer run: its command, its G-code file and, beside it, its ``.out.log`` / ``.err.log``."""
+
     label: str
     cmd: list[str]
     gcode: Path
@@ -358,14 +360,26 @@ class _Job:
     elapsed: float = 0.0
 
     def log(self, stream: str) -> Path:
+        """The log file of ``stream`` (``"out"`` or ``"err"``)."""
         return self.gcode.with_suffix(f".{stream}.log")
 
 
 def _run_jobs(jobs: list[_Job], workers: int, timeout: float) -> None:
-    """Run the jobs, ``workers`` at a time, ``timeout`` seconds each.
+    """Run PrusaSlicer jobs in parallel.
 
-    On the first failure or timeout every running job is killed and
-    :class:`SlicerError` is raised.
+    Parameters
+    ----------
+    jobs : list of _Job
+        Their ``proc``, ``started`` and ``elapsed`` are filled in.
+    workers : int
+        Jobs running at a time.
+    timeout : float
+        Seconds allowed for each job.
+
+    Raises
+    ------
+    SlicerError
+        On the first failure or timeout, after every running job is killed.
     """
     pending, running = list(jobs), []
     try:
