@@ -75,9 +75,9 @@ def table(rows: list[dict], args) -> str:
         slicer_cell = f"{s['before']['support_mm']:.0f} → {s['after']['support_mm']:.0f}" if s else "not run"
         slicer_red = fmt(s["reduction_percent"], ".1f") + " %" if s else "–"
         lines.append(
-            f"| {r['model']} | {fmt(b['overhang_prism'])} → {fmt(a['overhang_prism'])} "
+            f"| {r['model']} | {fmt(b['support_prism'])} → {fmt(a['support_prism'])} "
             f"| {fmt(b['support_column'])} → {fmt(a['support_column'])} | {slicer_cell} "
-            f"| {fmt(red['overhang_prism'], '.1f')} % / {fmt(red['support_column'], '.1f')} % / {slicer_red} "
+            f"| {fmt(red['support_prism'], '.1f')} % / {fmt(red['support_column'], '.1f')} % / {slicer_red} "
             f"| {a['terms']['arap']:.4f} | {a['self_intersection_volume']:.2g} / {a['intersecting_face_pairs']} "
             f"| {r['runtime_s']:.1f} s |")
     return "\n".join(lines)

@@ -178,8 +178,8 @@ def _summary_table(report: dict):
     table = Table(title=f"{report['model']}: rest pose vs found pose")
     for col in ("measure", "before", "after", "change"):
         table.add_column(col, justify="right" if col != "measure" else "left")
-    table.add_row("support, prism estimate", f"{b['overhang_prism']:.4g}", f"{a['overhang_prism']:.4g}",
-                  pct(red["overhang_prism"]))
+    table.add_row("support, prism estimate", f"{b['support_prism']:.4g}", f"{a['support_prism']:.4g}",
+                  pct(red["support_prism"]))
     table.add_row("support, column estimate", f"{b['support_column']:.4g}", f"{a['support_column']:.4g}",
                   pct(red["support_column"]))
     table.add_row("risky area", f"{b['risky_area']:.4g}", f"{a['risky_area']:.4g}", pct(red["risky_area"]))
@@ -392,7 +392,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
 @click.option("--port", default=None, type=click.IntRange(1, 65535), help="Port (default: a free one from 8080).")
 @click.option("--host", default="127.0.0.1", show_default=True, help="Address to bind.")
 def view(model, skeleton, up, tets, weights, no_cache, cache_dir, demo_figure, port, host):
-    """Pose MODEL in the browser: live supports, optimise, export."""
+    """Pose MODEL in the browser: live supports, optimize, export."""
     from .ui.app import run_app
 
     if demo_figure:

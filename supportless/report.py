@@ -45,9 +45,12 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
     Returns
     -------
     measures : dict
-        Raw energies (``arap``, ``overhang_prism``, ``support_column``,
-        ``self_intersection_volume``), ``risky_area``, normalised terms and
-        objective, and ``intersecting_face_pairs``.
+        ``arap`` (raw distortion); the two support estimates ``support_prism``
+        (the paper's overhang energy,
+        :func:`~supportless.energies.overhang.overhang_energy`) and
+        ``support_column`` (:func:`~supportless.energies.support.support_volume`);
+        ``self_intersection_volume``, ``risky_area``, the normalised ``terms``
+        and ``objective``, and ``intersecting_face_pairs`` (when ``exact``).
     """
     rig = objective.rig
     V = rig.pose(angles) if vertices is None else vertices
@@ -58,7 +61,7 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         "terms": {k: float(v) for k, v in terms.items()},
         "arap": float(raw["arap"]),
         "overhang_angle": float(angle),
-        "overhang_prism": float(overhang_energy(V, rig.faces, rig.up, angle)),
+        "support_prism": float(overhang_energy(V, rig.faces, rig.up, angle)),
         "support_column": float(support_volume(V, rig.faces, rig.up, angle, objective.resolution)),
         "risky_area": float(risky_area(V, rig.faces, rig.up, angle)),
         "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
@@ -115,7 +118,7 @@ def build_report(rig, result) -> dict:
         "before": before,
         "after": after,
         "reduction_percent": {
-            "overhang_prism": reduction(before["overhang_prism"], after["overhang_prism"]),
+            "support_prism": reduction(before["support_prism"], after["support_prism"]),
             "support_column": reduction(before["support_column"], after["support_column"]),
             "risky_area": reduction(before["risky_area"], after["risky_area"]),
         },
@@ -164,7 +167,7 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
     joints_rest = rig.joints + shift_rest
     joints_posed = rig.posed_joints(result.angles) + shift_posed
     risky = rig.dim == 3
-    change = (report or {}).get("reduction_percent", {}).get("overhang_prism")
+    change = (report or {}).get("reduction_percent", {}).get("support_prism")
     before_after = render_before_after(
         folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
         before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),

@@ -1,6 +1,6 @@
 """Global search over bone rotations: a batched particle swarm.
 
-:func:`particle_swarm` is a plain bounded particle swarm optimiser with the
+:func:`particle_swarm` is a plain bounded particle swarm optimizer with the
 standard velocity update (inertia, cognitive and social terms, positions
 clamped to the bounds) as in libigl's ``igl::pso``, except that the whole swarm
 is evaluated in one batched call per iteration. :func:`optimize` searches the

@@ -85,7 +85,7 @@ def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
         assert key in report
     for side in ("before", "after"):
         assert isinstance(report[side]["intersecting_face_pairs"], int)
-        assert report[side]["overhang_prism"] >= 0
+        assert report[side]["support_prism"] >= 0
     assert report["after"]["objective"] <= report["before"]["objective"] + 1e-12
     pictures = sorted(p.name for p in (out / "pictures").iterdir())
     assert pictures and all(name.endswith(".png") for name in pictures)

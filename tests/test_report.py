@@ -31,7 +31,7 @@ def test_pose_measures_are_the_energies_at_the_given_threshold(branch_rig):
     V = rig.pose(angles)
     m = pose_measures(obj, angles, overhang_angle=35.0)
     assert m["overhang_angle"] == 35.0
-    assert m["overhang_prism"] == sl.overhang_energy(V, rig.faces, rig.up, 35.0)
+    assert m["support_prism"] == sl.overhang_energy(V, rig.faces, rig.up, 35.0)
     assert m["support_column"] == sl.support_volume(V, rig.faces, rig.up, 35.0, obj.resolution)
     assert m["risky_area"] == sl.risky_area(V, rig.faces, rig.up, 35.0)
     assert m["self_intersection_volume"] == sl.self_intersection_volume(V, rig.faces, rig.up, obj.resolution)
@@ -49,10 +49,10 @@ def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(bra
     json.dumps(rep)  # JSON-ready
     assert rep["before"]["overhang_angle"] == rep["after"]["overhang_angle"] == 40.0
     rest = rig.pose(rig.rest_angles())  # linear blend skinning at rest: the rest surface to the last bits
-    assert rep["before"]["overhang_prism"] == sl.overhang_energy(rest, rig.faces, rig.up, 40.0)
-    assert rep["after"]["overhang_prism"] == sl.overhang_energy(rig.pose(searched.angles), rig.faces, rig.up, 40.0)
-    assert rep["reduction_percent"]["overhang_prism"] == reduction(rep["before"]["overhang_prism"],
-                                                                   rep["after"]["overhang_prism"])
+    assert rep["before"]["support_prism"] == sl.overhang_energy(rest, rig.faces, rig.up, 40.0)
+    assert rep["after"]["support_prism"] == sl.overhang_energy(rig.pose(searched.angles), rig.faces, rig.up, 40.0)
+    assert rep["reduction_percent"]["support_prism"] == reduction(rep["before"]["support_prism"],
+                                                                   rep["after"]["support_prism"])
     assert rep["after"]["objective"] == pytest.approx(searched.value, rel=1e-12)
     assert rep["settings"]["overhang_angle"] == 40.0 and rep["settings"]["search_overhang_angle"] == 50.0
     assert rep["settings"]["fixed_bones"] == [int(b) + 1 for b in np.flatnonzero(searched.fixed)]

@@ -74,7 +74,7 @@ def test_posing_updates_measures_and_latency(app, rig):
     app.reset()
     assert app.wait_idle()
     rest = dict(app.measures)
-    assert rest["reduction"]["overhang_prism"] == pytest.approx(0.0, abs=1e-9)
+    assert rest["reduction"]["support_prism"] == pytest.approx(0.0, abs=1e-9)
     b = rig.bone_count - 1
     app.state.set_bone_angles(b, [0.0, 0.0, 40.0])
     assert app.wait_idle()

@@ -161,15 +161,15 @@ def test_export_mesh_file_and_bytes_on_the_plate(state, branch_rig, tmp_path):
 
 def test_measures_follow_the_pose(state, branch_rig):
     rest = state.measure()
-    assert rest["reduction"]["overhang_prism"] == pytest.approx(0.0, abs=1e-9)
+    assert rest["reduction"]["support_prism"] == pytest.approx(0.0, abs=1e-9)
     assert rest["risky"].shape == (len(branch_rig.faces),)
     assert rest["intersecting_face_pairs"] == len(rest["intersecting_faces"]) == 0
     state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 40.0])
     moved = state.measure()
     assert moved["objective"] != pytest.approx(rest["objective"])
     assert moved["terms"]["arap"] > rest["terms"]["arap"]
-    assert moved["overhang_prism"] != pytest.approx(rest["overhang_prism"])
-    assert moved["reduction"]["overhang_prism"] != pytest.approx(0.0)
+    assert moved["support_prism"] != pytest.approx(rest["support_prism"])
+    assert moved["reduction"]["support_prism"] != pytest.approx(0.0)
     assert state.measure(exact=False)["intersecting_faces"] is None  # not checked
 
 

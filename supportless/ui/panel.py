@@ -65,7 +65,7 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         f"- Overhang term: {_fmt(t['overhang'])} (× {settings.w_overhang:g}, faces past "
         f"{settings.search_overhang_angle:g}°)",
         f"- Intersection term: {_fmt(t['intersection'])} (× {settings.w_intersect:g})",
-        f"- Support (prism): {_fmt(m['overhang_prism'])} ({_vs_rest(red.get('overhang_prism'))})",
+        f"- Support (prism): {_fmt(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
         f"- Support (column): {_fmt(m['support_column'])} ({_vs_rest(red.get('support_column'))})",
         f"- Risky faces (past {m['overhang_angle']:g}°): {int(np.sum(m['risky']))} · "
         f"self-intersecting: {inter_txt}",

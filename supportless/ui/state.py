@@ -54,7 +54,7 @@ __all__ = ["EditorState", "REDUCED_MEASURES"]
 logger = logging.getLogger("supportless.ui")
 
 #: Measures compared with the rest pose (``measures["reduction"]``, percent).
-REDUCED_MEASURES = ("overhang_prism", "support_column", "risky_area")
+REDUCED_MEASURES = ("support_prism", "support_column", "risky_area")
 
 
 def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
