@@ -15,6 +15,7 @@ import click
 import numpy as np
 
 from .errors import InputError, SupportlessError
+from .shapes import DEMO_FIGURES
 
 __all__ = ["main"]
 
@@ -344,7 +345,8 @@ def slice_check_cmd(original, posed, up, height_mm, as_json):
 @main.command()
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="supportless-demo", show_default=True,
               help="Folder for the demo's files.")
-@click.option("--figure", type=click.Choice(["tpose", "branch", "woody2d"]), default="tpose", show_default=True)
+@click.option("--figure", type=click.Choice(list(DEMO_FIGURES)), default="tpose", show_default=True,
+              help="Built-in figure.")
 @click.option("--particles", default=60, show_default=True, type=click.IntRange(2, None))
 @click.option("--iterations", default=40, show_default=True, type=click.IntRange(0, None))
 @click.option("--seed", default=0, show_default=True, type=int)
