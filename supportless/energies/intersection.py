@@ -5,7 +5,8 @@ footprint (the bounding box of the vertices projected onto the plane
 orthogonal to ``up``).  Along each ray the surface crossings are sorted by
 height; going up, a face with ``n . up < 0`` enters material (+1) and one
 with ``n . up > 0`` leaves it (-1).  The length along which the running count
-is at least 2 is summed over rays and multiplied by the cell area.
+is at least 2 is summed over rays and multiplied by the cell area.  The rays
+and their crossing rule are those of :mod:`supportless.energies.raygrid`.
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ from .raygrid import DEFAULT_RESOLUTION, ray_grid
 from .surface import prepare
 
 __all__ = ["self_intersection_volume", "DEFAULT_RESOLUTION"]
-
 
 
 def self_intersection_volume(vertices, faces, up, resolution=DEFAULT_RESOLUTION, backend="fast"):
@@ -28,8 +28,10 @@ def self_intersection_volume(vertices, faces, up, resolution=DEFAULT_RESOLUTION,
         Consistently oriented triangles of a closed surface (3D), or of a
         planar region whose boundary edges are the surface (2D).  Either
         winding is accepted (sign of the total signed volume/area).
-    up : (d,) float
-        Printing direction (normalised internally).
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     resolution : int
         Number of square ray cells along the longer side of the footprint
         (default 192, i.e. up to 192 x 192 rays in 3D, 192 rays in 2D).

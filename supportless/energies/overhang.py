@@ -13,7 +13,9 @@ from horizontal needs support.  Its support is approximated by a prism
 
 with ``A_f`` the area (length in 2D) and ``h_f`` the height of the element's
 centroid above the build plate, the lowest vertex of the same pose along
-``up``.  The energy is the sum of ``lambda`` over risky elements.
+``up``.  The energy is the sum of ``lambda`` over risky elements;
+:func:`projected_risky_area` sums ``A_f |n_f . up|`` (the prism without its
+height) and :func:`risky_area` sums ``A_f``.
 
 Outward orientation is taken from the sign of the total signed volume (3D)
 or signed area (2D) of each pose, so either consistent winding works.
@@ -26,12 +28,17 @@ from numba import njit, prange
 
 from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
-__all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area", "boundary_edges"]
+__all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area"]
 
 
 @njit(cache=True, parallel=True)
 def _kernel3(V, F, up, orient, tau, mask):
-    """Energy and risky area per pose (3D); fills ``mask`` (P, f)."""
+    """Energy and risky area per pose (3D).
+
+    ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (3,) float64
+    unit, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
+    bool with the risky faces and returns (P, 2) float64 [energy, risky area].
+    """
     P = V.shape[0]
     out = np.zeros((P, 2), np.float64)
     ux, uy, uz = up[0], up[1], up[2]
@@ -75,7 +82,13 @@ def _kernel3(V, F, up, orient, tau, mask):
 
 @njit(cache=True, parallel=True)
 def _kernel2(V, E, up, orient, tau, mask):
-    """Energy and risky length per pose (2D boundary edges); fills ``mask``."""
+    """Energy and risky length per pose (2D).
+
+    ``V`` (P, n, 2) float64 poses, ``E`` (e, 2) int64 boundary edges
+    (:func:`.surface.boundary_edges`), ``up`` (2,) float64 unit, ``orient``
+    (P,) float64; fills ``mask`` (P, e) bool with the risky edges and returns
+    (P, 2) float64 [energy, risky length].
+    """
     P = V.shape[0]
     out = np.zeros((P, 2), np.float64)
     ux, uy = up[0], up[1]
@@ -108,7 +121,11 @@ def _kernel2(V, E, up, orient, tau, mask):
 
 
 def _numpy(V, F, u, orient, tau):
-    """Plain numpy version of the kernels: ((P, 2) [energy, risky measure], mask)."""
+    """Plain numpy version of the kernels, poses in chunks of bounded memory.
+
+    Same arguments as :func:`_kernel3` (faces ``F``; boundary edges taken
+    here in 2D); returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask).
+    """
     P = V.shape[0]
     d = V.shape[-1]
     E = F if d == 3 else boundary_edges(F)
@@ -141,7 +158,10 @@ def _numpy(V, F, u, orient, tau):
 
 
 def _compute(vertices, faces, up, overhang_angle, backend="fast"):
-    """Run the kernel: returns ((P, 2) [energy, risky measure], mask, single)."""
+    """Check the arguments and run a backend.
+
+    Returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask, single).
+    """
     check_backend(backend)
     V, F, u, single = prepare(vertices, faces, up)
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
@@ -159,6 +179,7 @@ def _compute(vertices, faces, up, overhang_angle, backend="fast"):
 
 
 def _out(x, single):
+    """(P,) float64 ``x`` as given, or its one value as a float for a single pose."""
     return float(x[0]) if single else np.ascontiguousarray(x)
 
 
@@ -172,8 +193,10 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     faces : (f, 3) int
         Consistently oriented triangles of a closed surface (3D) or of a
         planar region (2D).
-    up : (d,) float
-        Printing direction (normalised internally).
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     overhang_angle : float
         Threshold slope ``theta`` in degrees measured from the build plate;
         risky when ``n . up < -cos(theta)``.
@@ -200,8 +223,10 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
         Deformed vertex positions, ``d`` in {2, 3}.
     faces : (f, 3) int
         Consistently oriented triangles.
-    up : (d,) float
-        Printing direction (normalised internally).
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     overhang_angle : float
         Threshold slope in degrees from the build plate (default 45).
     backend : {"fast", "numpy"}
@@ -228,8 +253,10 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     faces : (f, 3) int
         Consistently oriented triangles (closed surface in 3D; planar region
         in 2D, whose boundary edges are the surface).
-    up : (d,) float
-        Printing direction (normalised internally).
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default
         45); risky when ``n . up < -cos(theta)``.
@@ -248,18 +275,21 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     return _out(out[:, 0], single)
 
 
-def projected_risky_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray,
-                         overhang_angle: float = 45.0) -> np.ndarray:
+def projected_risky_area(vertices, faces, up, overhang_angle=45.0):
     """Area of the risky faces projected on the build plate.
 
     Parameters
     ----------
     vertices : (P, n, d) or (n, d) float64
         Closed surface (3D) or planar triangle mesh (2D), either winding.
-    faces : (f, 3) int64
-    up : (d,) float64
+    faces : (f, 3) int
+        Consistently oriented triangles.
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     overhang_angle : float
-        Degrees from the build plate.
+        Threshold slope in degrees from the build plate (default 45).
 
     Returns
     -------
@@ -267,19 +297,16 @@ def projected_risky_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray
         ``sum A_f |n_f . up|`` over faces with ``n_f . up < -cos(angle)``
         (lengths of boundary edges in 2D).
     """
-    V = np.asarray(vertices, np.float64)
-    single = V.ndim == 2
-    V = V[None] if single else V
-    up = np.asarray(up, np.float64) / np.linalg.norm(up)
+    V, F, up, single = prepare(vertices, faces, up)
     tau = np.cos(np.radians(overhang_angle))
     if V.shape[-1] == 3:
-        a, b, c = V[:, faces[:, 0]], V[:, faces[:, 1]], V[:, faces[:, 2]]
+        a, b, c = V[:, F[:, 0]], V[:, F[:, 1]], V[:, F[:, 2]]
         scaled_normal = 0.5 * np.cross(b - a, c - a)  # area * unit normal
     else:
-        E = boundary_edges(faces)  # triangle direction; orientation_sign below makes it outward
+        E = boundary_edges(F)  # triangle direction; orientation_sign below makes it outward
         d = V[:, E[:, 1]] - V[:, E[:, 0]]
         scaled_normal = np.stack([d[..., 1], -d[..., 0]], -1)  # length * outward normal
-    along = (scaled_normal @ up) * orientation_sign(V, faces)[:, None]  # either winding
+    along = (scaled_normal @ up) * orientation_sign(V, F)[:, None]  # either winding
     size = np.linalg.norm(scaled_normal, axis=-1)
     out = np.where(along < -tau * size, -along, 0.0).sum(-1)
     return float(out[0]) if single else out

@@ -1,13 +1,13 @@
 """Column support estimator.
 
-The same grid of rays as :mod:`supportless.energies.intersection` is cast
-along ``up`` through the footprint.  Along each ray, every *risky* crossing
-where the ray enters material from air (outward normal with
-``n . up < -cos(theta)``) needs a vertical support column that runs down to
-the previous crossing below it -- the top of the material underneath (an
-upward-facing face) -- or to the build plate (the lowest vertex of the pose)
-when nothing lies below.  Column lengths are summed and multiplied by the
-cell area.
+The ray grid of :mod:`supportless.energies.raygrid` (the same as for the
+self-intersection volume) is cast along ``up`` through the footprint.  Along
+each ray, every *risky* crossing where the ray enters material from air
+(outward normal with ``n . up < -cos(theta)``) needs a vertical support
+column that runs down to the previous crossing below it -- the top of the
+material underneath (an upward-facing face) -- or to the build plate (the
+lowest vertex of the pose) when nothing lies below.  Column lengths are
+summed and multiplied by the cell area.
 
 Unlike the prism energy in :mod:`supportless.energies.overhang`, this does
 not count support below parts that rest on the model itself, and only what
@@ -25,7 +25,6 @@ from .surface import prepare
 __all__ = ["support_volume", "DEFAULT_RESOLUTION"]
 
 
-
 def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_RESOLUTION, backend="fast"):
     """Volume (area in 2D) of vertical support columns under risky faces.
 
@@ -36,8 +35,10 @@ def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_
     faces : (f, 3) int
         Consistently oriented triangles of a closed surface (3D), or of a
         planar region whose boundary edges are the surface (2D).
-    up : (d,) float
-        Printing direction (normalised internally).
+    up : str or (d,) array_like of float
+        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
+        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
+        see :func:`supportless.energies.surface.prepare`.
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default
         45); a face is risky when ``n . up < -cos(theta)``.
