@@ -134,7 +134,8 @@ def test_sweep_rays_matches_brute_force(seed):
     for kmin in (1, 2, 4):
         cnt = np.bincount(pix[code >= 0], minlength=npix)
         m = len(pix)
-        got = sweep_rays(pix, z, code, m, cnt, npix, kmin, zplate, np.empty(npix, np.int64), np.empty(m), np.empty(m, np.int8))
+        work = np.empty(npix, np.int64), np.empty(m), np.empty(m, np.int8)
+        got = sweep_rays(pix, z, code, m, cnt, npix, kmin, zplate, *work)
         want = brute_force_sweep(pix, z, code, zplate, npix, kmin)
         assert got == want
     assert want[0] > 0 and want[1] > 0

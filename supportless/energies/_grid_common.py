@@ -36,6 +36,7 @@ __all__ = [
     "inside",
     "triangle_edges",
     "inside_triangle",
+    "triangle",
     "face_normal",
     "risk_code",
     "sweep_rays",
@@ -192,6 +193,16 @@ def inside_triangle(edges, px, py):
 # ---------------------------------------------------------------------------
 # crossings
 # ---------------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def triangle(X, F, f):
+    """The corners of triangle ``f``: ``(ax, ay, az, bx, by, bz, cx, cy, cz)``
+    from ``X`` (n, 3) float64 and ``F`` (f, 3) int64."""
+    i0 = F[f, 0]
+    i1 = F[f, 1]
+    i2 = F[f, 2]
+    return X[i0, 0], X[i0, 1], X[i0, 2], X[i1, 0], X[i1, 1], X[i1, 2], X[i2, 0], X[i2, 1], X[i2, 2]
 
 
 @njit(cache=True, inline="always")

@@ -35,6 +35,7 @@ from ._grid_common import (
     grid_layout,
     inside_triangle,
     sweep_rays,
+    triangle,
     triangle_edges,
 )
 from .surface import frame_matrix, orientation_sign, signed_volume3, to_frame
@@ -110,17 +111,8 @@ def _decide_near_edges(X, F, ubuf, ufac, nu, pix, cc, cnt, nx, u0, w0, cell):
     """
     for k in range(nu):
         t = ubuf[k]
-        f = ufac[k]
         q = pix[t]
-        i0 = F[f, 0]
-        i1 = F[f, 1]
-        i2 = F[f, 2]
-        ax = X[i0, 0]
-        ay = X[i0, 1]
-        bx = X[i1, 0]
-        by = X[i1, 1]
-        cx = X[i2, 0]
-        cy = X[i2, 1]
+        ax, ay, _, bx, by, _, cx, cy, _ = triangle(X, F, ufac[k])
         ccw = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0.0
         px = u0 + (q % nx + 0.5) * cell
         py = w0 + (q // nx + 0.5) * cell
@@ -135,16 +127,10 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
 
     Parameters
     ----------
-    X : (n, 3) float64
-        Vertices in the frame of ``up``.
-    F : (f, 3) int64
-        Triangles.
-    orient : float
-        Orientation sign of the pose.
-    R : int
-        Cells along the longer side of the footprint.
-    tau : float
-        Risk threshold.
+    X, F, orient, R, tau
+        As :func:`._grid_reference._pose3`: frame coordinates (n, 3) float64,
+        triangles (f, 3) int64, orientation sign, cells along the longer
+        side, risk threshold.
     support : bool
         False: only the self-intersection volume is wanted (two passes).
     pix, zz, cc : (cap,) int32, float64, int8
@@ -185,12 +171,7 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
         if pss == 1:
             _flag_rays(cnt, sat, nx, ny)
         for f in range(F.shape[0]):
-            i0 = F[f, 0]
-            i1 = F[f, 1]
-            i2 = F[f, 2]
-            ay = X[i0, 1]
-            by = X[i1, 1]
-            cy = X[i2, 1]
+            ax, ay, az, bx, by, bz, cx, cy, cz = triangle(X, F, f)
             # ray centres of the bounding box, with a margin of eps cells
             sj_lo = (min(ay, min(by, cy)) - w0) * inv - 0.5
             sj_hi = (max(ay, max(by, cy)) - w0) * inv - 0.5
@@ -198,17 +179,13 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
             j_hi = min(ny - 1, int(np.floor(sj_hi + eps)))
             if j_hi < j_lo:
                 continue
-            ax = X[i0, 0]
-            bx = X[i1, 0]
-            cx = X[i2, 0]
             lo_u = min(ax, min(bx, cx))
             hi_u = max(ax, max(bx, cx))
             i_lo = max(0, int(np.ceil((lo_u - u0) * inv - 0.5 - eps)))
             i_hi = min(nx - 1, int(np.floor((hi_u - u0) * inv - 0.5 + eps)))
             if i_hi < i_lo:
                 continue
-            az = X[i0, 2]
-            nxv, nyv, nzv = face_normal(ax, ay, az, bx, by, X[i1, 2], cx, cy, X[i2, 2])
+            nxv, nyv, nzv = face_normal(ax, ay, az, bx, by, bz, cx, cy, cz)
             if nzv == 0.0:  # vertical: no ray crosses it
                 continue
             code = _face_code(orient, nxv, nyv, nzv, tau, support)

@@ -101,22 +101,16 @@ def pose3_numpy(X, F, orient, R, tau, support=True):
     Parameters
     ----------
     X : (n, 3) float64
-        Vertices in the frame of ``up``.
     F : (f, 3) int64
-        Triangles.
-    orient : float
-        Orientation sign of the pose.
-    R : int
-        Cells along the longer side of the footprint.
-    tau : float
-        Risk threshold.
+    orient, R, tau
+        As :func:`._grid_reference._pose3`.
     support : bool
         False: skip the risky test (the support volume is then meaningless).
 
     Returns
     -------
     inter, sup : float
-        Volume inside two or more layers; support column volume.
+        As :func:`._grid_reference._pose3`.
     """
     umin, wmin, zplate = X.min(axis=0)
     umax, wmax, _ = X.max(axis=0)
@@ -172,20 +166,14 @@ def pose2_numpy(X, E, orient, R, tau):
     Parameters
     ----------
     X : (n, 2) float64
-        Vertices in the frame of ``up``.
     E : (e, 2) int64
-        Boundary edges.
-    orient : float
-        Orientation sign of the pose.
-    R : int
-        Number of rays.
-    tau : float
-        Risk threshold.
+    orient, R, tau
+        As :func:`._grid_reference._pose2`.
 
     Returns
     -------
     inter, sup : float
-        Area inside two or more layers; support column area.
+        As :func:`._grid_reference._pose2`.
     """
     umin, zplate = X.min(axis=0)
     umax = X[:, 0].max()

@@ -21,6 +21,7 @@ from ._grid_common import (
     inside_triangle,
     risk_code,
     sweep_rays,
+    triangle,
     triangle_edges,
 )
 
@@ -99,17 +100,8 @@ def _pose3(X, F, orient, R, tau):
     cnt = np.zeros(nx * ny, np.int64)
     m = 0
     for f in range(F.shape[0]):
-        i0 = F[f, 0]
-        i1 = F[f, 1]
-        i2 = F[f, 2]
-        ax = X[i0, 0]
-        ay = X[i0, 1]
-        az = X[i0, 2]
-        bx = X[i1, 0]
-        by = X[i1, 1]
-        cx = X[i2, 0]
-        cy = X[i2, 1]
-        nxv, nyv, nzv = face_normal(ax, ay, az, bx, by, X[i1, 2], cx, cy, X[i2, 2])
+        ax, ay, az, bx, by, bz, cx, cy, cz = triangle(X, F, f)
+        nxv, nyv, nzv = face_normal(ax, ay, az, bx, by, bz, cx, cy, cz)
         if nzv == 0.0:  # vertical: no ray crosses it
             continue
         nlen = np.sqrt(nxv * nxv + nyv * nyv + nzv * nzv)

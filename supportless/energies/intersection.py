@@ -29,9 +29,8 @@ def self_intersection_volume(vertices, faces, up, resolution=DEFAULT_RESOLUTION,
         planar region whose boundary edges are the surface (2D).  Either
         winding is accepted (sign of the total signed volume/area).
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     resolution : int
         Number of square ray cells along the longer side of the footprint
         (default 192, i.e. up to 192 x 192 rays in 3D, 192 rays in 2D).

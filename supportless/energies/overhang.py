@@ -194,9 +194,8 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0, backend="fast"):
         Consistently oriented triangles of a closed surface (3D) or of a
         planar region (2D).
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
         Threshold slope ``theta`` in degrees measured from the build plate;
         risky when ``n . up < -cos(theta)``.
@@ -224,9 +223,8 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     faces : (f, 3) int
         Consistently oriented triangles.
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
         Threshold slope in degrees from the build plate (default 45).
     backend : {"fast", "numpy"}
@@ -254,9 +252,8 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
         Consistently oriented triangles (closed surface in 3D; planar region
         in 2D, whose boundary edges are the surface).
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default
         45); risky when ``n . up < -cos(theta)``.
@@ -281,13 +278,12 @@ def projected_risky_area(vertices, faces, up, overhang_angle=45.0):
     Parameters
     ----------
     vertices : (P, n, d) or (n, d) float64
-        Closed surface (3D) or planar triangle mesh (2D), either winding.
+        Closed surface (3D) or planar triangle mesh (2D).
     faces : (f, 3) int
-        Consistently oriented triangles.
+        Triangles, consistently oriented, either winding.
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
         Threshold slope in degrees from the build plate (default 45).
 

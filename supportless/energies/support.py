@@ -36,9 +36,8 @@ def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_
         Consistently oriented triangles of a closed surface (3D), or of a
         planar region whose boundary edges are the surface (2D).
     up : str or (d,) array_like of float
-        Printing direction: an axis name ``"x" | "y" | "z" | "-x" | "-y" |
-        "-z"``, numbers ``"0,1,0"``, or a nonzero vector (normalised);
-        see :func:`supportless.energies.surface.prepare`.
+        Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
+        (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default
         45); a face is risky when ``n . up < -cos(theta)``.

@@ -135,20 +135,8 @@ def signed_volume3(X, F):
 
 @njit(cache=True, inline="always")
 def signed_area2(X, F):
-    """Signed area of one pose's planar triangles (numba).
-
-    Parameters
-    ----------
-    X : (n, 2) float64
-        Vertices of one pose.
-    F : (f, 3) int64
-        Triangles.
-
-    Returns
-    -------
-    area : float
-        Sum of the triangles' signed areas; positive when counter-clockwise.
-    """
+    """Signed area of one pose's planar triangles (numba): :func:`signed_volume3` for
+    ``X`` (n, 2) float64; positive when counter-clockwise."""
     t = 0.0
     for f in range(F.shape[0]):
         a = F[f, 0]
