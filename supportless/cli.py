@@ -161,10 +161,13 @@ def _run_search(rig, console, settings, quiet=False):
                                                        f"· overhang {t['overhang']:.3f} "
                                                        f"· intersect {t['intersection']:.3f}")
 
-        try:
-            settings.fixed_bones(rig)  # a bad --fix/--free is reported before the search starts
+        try:  # a bad --fix/--free, or nothing left to move, is reported before the search starts
+            fixed = settings.fixed_bones(rig)
         except ValueError as exc:
             raise InputError(None, str(exc)) from None
+        if fixed.all():
+            raise InputError(None, f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} rest on the "
+                                   "build plate or join bones that do): free some with --free 2,3 or --free all")
         return optimize(rig, settings, callback=callback)
 
 

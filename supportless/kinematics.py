@@ -102,6 +102,88 @@ def descendants(parents: np.ndarray, bone: int) -> np.ndarray:
     return mask
 
 
+def reroot(bones: np.ndarray, parents: np.ndarray, anchor: int) -> tuple[np.ndarray, np.ndarray]:
+    """Re-root a skeleton's kinematic tree at one bone.
+
+    The bones on the path from ``anchor`` up to its root have their parent
+    pointers reversed: each now hangs from its former child and turns about the
+    joint they share (its tip). Every other bone keeps its parent and turns
+    about its root joint. With ``anchor`` a root bone nothing changes.
+
+    Parameters
+    ----------
+    bones : (m, 2) int64
+    parents : (m,) int64
+        From :func:`bone_parents`.
+    anchor : int
+        The bone that becomes a root (e.g. the one resting on the build plate).
+
+    Returns
+    -------
+    parents : (m,) int64
+        The re-rooted parent of each bone (-1 for roots).
+    pivots : (m,) int64
+        The joint each bone turns about.
+    """
+    bones = np.asarray(bones, np.int64)
+    new = np.array(parents, np.int64)
+    pivots = bones[:, 0].copy()
+    child, b = -1, int(anchor)
+    while b >= 0:
+        up = int(parents[b])
+        new[b] = child
+        if child >= 0:
+            pivots[b] = bones[b, 1]  # shared with the former child
+        child, b = b, up
+    return new, pivots
+
+
+def connecting_bones(bones: np.ndarray, terminals: np.ndarray) -> np.ndarray:
+    """The smallest connected set of bones that contains the given ones.
+
+    Two bones are connected when they share a joint. The set is the union of
+    the shortest chains from the first terminal to every other one; in a
+    skeleton (a tree of joints) that is the smallest connected set. Terminals in
+    separate skeletons (a forest) stay separate.
+
+    Parameters
+    ----------
+    bones : (m, 2) int64
+    terminals : (m,) bool
+
+    Returns
+    -------
+    mask : (m,) bool
+        ``terminals`` and the bones between them.
+    """
+    bones = np.asarray(bones, np.int64)
+    m = len(bones)
+    terminals = np.asarray(terminals, bool)
+    mask = terminals.copy()
+    by_joint: dict[int, list[int]] = {}
+    for b, (r, t) in enumerate(bones):
+        by_joint.setdefault(int(r), []).append(b)
+        by_joint.setdefault(int(t), []).append(b)
+    todo = list(np.flatnonzero(terminals))
+    while todo:  # one breadth-first search per connected group of terminals
+        source = todo[0]
+        previous = np.full(m, -2)
+        previous[source] = -1
+        queue = [source]
+        for b in queue:
+            for joint in bones[b]:
+                for c in by_joint[int(joint)]:
+                    if previous[c] == -2:
+                        previous[c] = b
+                        queue.append(c)
+        for t in todo:
+            while t >= 0 and previous[t] != -2:  # walk back to the source
+                mask[t] = True
+                t = previous[t]
+        todo = [t for t in todo if previous[t] == -2]
+    return mask
+
+
 def euler_to_matrix(angles: np.ndarray) -> np.ndarray:
     """Rotation matrices from XYZ Euler angles.
 
@@ -180,7 +262,8 @@ def planar_rotation(theta: np.ndarray) -> np.ndarray:
 
 
 def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray,
-                       parents: np.ndarray | None = None, order: np.ndarray | None = None) -> np.ndarray:
+                       parents: np.ndarray | None = None, order: np.ndarray | None = None,
+                       pivots: np.ndarray | None = None) -> np.ndarray:
     """Bone transforms of a batch of poses.
 
     Parameters
@@ -191,8 +274,11 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
     angles : (P, m, 3) or (m, 3) float64
         Relative XYZ Euler angles per bone, radians (2D uses ``[..., 2]`` only).
     parents, order : (m,) int64, optional
-        From :func:`bone_parents` and :func:`topological_order`; computed when
-        not given.
+        From :func:`bone_parents` and :func:`topological_order` (or a tree
+        re-rooted by :func:`reroot`); computed from ``bones`` when not given.
+    pivots : (m,) int64, optional
+        The joint each bone turns about, shared with its parent (default: its
+        root joint ``bones[:, 0]``; see :func:`reroot`).
 
     Returns
     -------
@@ -216,7 +302,7 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
     dQ = euler_to_matrix(angles) if d == 3 else planar_rotation(angles[..., 2])
     Q = np.empty((P, m, d, d))
     t = np.empty((P, m, d))
-    roots = joints[bones[:, 0]]  # (m, d)
+    roots = joints[bones[:, 0] if pivots is None else np.asarray(pivots, np.int64)]  # (m, d)
     for b in order:  # m iterations, each vectorised over poses
         r = roots[b]
         p = parents[b]
@@ -225,7 +311,7 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
             t[:, b] = r - dQ[:, b] @ r
         else:
             Q[:, b] = Q[:, p] @ dQ[:, b]
-            # the root joint moves with the parent, then the bone turns about it
+            # the pivot joint moves with the parent, then the bone turns about it
             t[:, b] = Q[:, p] @ r + t[:, p] - Q[:, b] @ r
     out = np.concatenate([Q, t[..., None]], axis=-1)
     return out[0] if single else out

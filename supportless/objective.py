@@ -1,6 +1,7 @@
-"""What the pose search minimises: a weighted, normalised sum of three energies.
+"""What the pose search minimises: a weighted, normalised sum of energies, and hard rules.
 
-``E = w_arap * E_arap / vol + w_overhang * E_overhang / S_rest + w_intersect * E_intersect / vol``
+``E = w_arap * E_arap / vol + w_overhang * E_overhang / S_rest + w_intersect * E_intersect / vol
++ w_prior * E_prior``, plus ``INFEASIBLE + violation`` for a pose that breaks a hard rule.
 
 * ``vol`` is the rest volume of the model (area in 2D). ``E_arap`` and
   ``E_intersect`` scale like a volume (s³ in 3D, s² in 2D), so dividing by
@@ -11,7 +12,13 @@
   overhang term is then 1.0 at the rest pose and 0.6 for a pose needing 40 %
   less support.
 
-All three normalised terms are invariant to the model's scale and units, so the
+* ``E_prior`` is the natural-pose prior (:mod:`supportless.prior`): squared
+  joint angles weighted by the share of the body each joint turns.
+* The hard rules: every joint within its limit (one angle), and the pose
+  stands as the rest pose stood (:mod:`supportless.standing`). ``violation``
+  measures how far a pose breaks them (0 when it keeps them).
+
+All normalised terms are invariant to the model's scale and units, so the
 same default weights work for a 6 cm and a 6 m model and for planar figures.
 """
 
@@ -27,14 +34,21 @@ from .energies.overhang import overhang_energy
 from .energies.support import support_volume
 from .kinematics import skin
 from .geometry import signed_volume
+from .prior import PosePrior
 from .rig import Rig
+from .standing import Standing
 
-__all__ = ["OVERHANG_MODELS", "Objective", "W_ARAP", "W_INTERSECT", "W_OVERHANG"]
+__all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "W_ARAP", "W_INTERSECT", "W_OVERHANG", "W_PRIOR"]
 
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
 W_OVERHANG = 1.0
 W_INTERSECT = 50.0
+W_PRIOR = 1.0
+
+#: Added to the value of a pose that breaks a hard rule (joint limit, standing):
+#: larger than any pose that keeps them can cost.
+INFEASIBLE = 1e3
 
 OVERHANG_MODELS = ("prism", "column")
 
@@ -65,12 +79,25 @@ class Objective:
         Precomputed reduced ARAP operators of this rig (with these
         ``clusters``), to share between objectives; computed on first use
         otherwise.
+    w_prior : float
+        Weight of the natural-pose prior (:meth:`supportless.prior.PosePrior.cost`).
+    joint_limits : float or (m,) float64
+        Largest rotation of each joint, degrees (one angle, see
+        :mod:`supportless.prior`); a pose past a limit does not count.
+    keep_standing : bool
+        A pose that touches the plate with a new part or falls over does not
+        count (:class:`supportless.standing.Standing`).
+
+    Poses that break a hard rule (a joint limit, or standing) get the value
+    ``INFEASIBLE + violation``: worse than any pose that keeps the rules, and
+    ranked by how far they break them.
     """
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
                  clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
-                 backend: str = "fast", arap_data: arap_mod.ArapData | None = None):
+                 backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
+                 joint_limits=180.0, keep_standing: bool = True):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -86,6 +113,9 @@ class Objective:
         self.backend = backend
         if arap_data is not None:
             self.__dict__["arap_data"] = arap_data  # fills the cached property below
+        self.w_prior = float(w_prior)
+        self.keep_standing = bool(keep_standing)
+        self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -93,6 +123,11 @@ class Objective:
         """Reduced ARAP operators of the rig (computed once)."""
         return arap_mod.arap_precompute(self.rig.tet_vertices, self.rig.tets, self.rig.tet_weights,
                                         clusters=self.clusters, rng=np.random.default_rng(0))
+
+    @cached_property
+    def standing(self) -> Standing:
+        """Contact and balance against the rest pose."""
+        return Standing(self.rig)
 
     @cached_property
     def volume(self) -> float:
@@ -135,14 +170,20 @@ class Objective:
         Returns
         -------
         terms : dict of str -> (P,) float64 (floats for a single pose)
-            ``arap`` (volume units), ``overhang`` and ``intersection`` (volumes).
+            ``arap`` (volume units), ``overhang`` and ``intersection`` (volumes),
+            ``prior`` (dimensionless) and ``violation`` (0 for a pose that
+            keeps the hard rules).
         """
         transforms, V = self._posed(angles)
-        return {
-            "arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
-            "overhang": self.overhang(V),
-            "intersection": self._intersection(V),
-        }
+        return self._cheap_terms(angles, transforms, V) | {"intersection": self._intersection(V)}
+
+    def _cheap_terms(self, angles, transforms, V) -> dict:
+        """Every raw term but the (expensive) intersection."""
+        violation = self.prior.excess(angles)
+        if self.keep_standing:
+            violation = violation + self.standing.violation(transforms, V)
+        return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
+                "overhang": self.overhang(V), "prior": self.prior.cost(angles), "violation": violation}
 
     def normalise(self, raw: dict) -> dict:
         """Raw terms -> normalised terms (see the module docstring)."""
@@ -150,12 +191,16 @@ class Objective:
             "arap": np.asarray(raw["arap"]) / self.volume,
             "overhang": np.asarray(raw["overhang"]) / self.overhang_scale,
             "intersection": np.asarray(raw["intersection"]) / self.volume,
+            "prior": np.asarray(raw["prior"]),
+            "violation": np.asarray(raw["violation"]),
         }
 
     def combine(self, terms: dict) -> np.ndarray:
-        """Weighted sum of normalised terms."""
-        return (self.w_arap * terms["arap"] + self.w_overhang * terms["overhang"]
-                + self.w_intersect * terms["intersection"])
+        """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""
+        value = (self.w_arap * terms["arap"] + self.w_overhang * terms["overhang"]
+                 + self.w_intersect * terms["intersection"] + self.w_prior * terms["prior"])
+        violation = terms["violation"]
+        return value + np.where(violation > 0, INFEASIBLE + violation, 0.0)
 
     def terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
         """Normalised terms of a batch of poses.
@@ -166,7 +211,7 @@ class Objective:
 
         Returns
         -------
-        terms : dict with keys ``arap``, ``overhang``, ``intersection``
+        terms : dict with keys ``arap``, ``overhang``, ``intersection``, ``prior``, ``violation``
             (P,) float64 arrays (0-d arrays for a single pose).
         """
         return self.normalise(self.raw_terms(angles))
@@ -197,8 +242,7 @@ class Objective:
             of it that is at least ``bound``.
         """
         transforms, V = self._posed(angles)
-        partial = {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
-                   "overhang": self.overhang(V), "intersection": 0.0}
+        partial = self._cheap_terms(angles, transforms, V) | {"intersection": 0.0}
         values = np.array(self.combine(self.normalise(partial)), np.float64)
         todo = np.flatnonzero(values < np.asarray(bound))
         if len(todo) and self.w_intersect != 0:
@@ -213,5 +257,6 @@ class Objective:
         """The weights and options, for reports."""
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
-                "clusters": self.clusters, "resolution": self.resolution}
+                "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
+                "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing}
 

@@ -50,7 +50,10 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         :func:`~supportless.energies.overhang.overhang_energy`) and
         ``support_column`` (:func:`~supportless.energies.support.support_volume`);
         ``self_intersection_volume``, ``risky_area``, the normalised ``terms``
-        and ``objective``, and ``intersecting_face_pairs`` (when ``exact``).
+        and ``objective``, contact and balance (``new_contact_vertices``,
+        ``stability_margin``, ``stands``, ``centre_of_mass``; see
+        :meth:`supportless.standing.Standing.measures`), and
+        ``intersecting_face_pairs`` (when ``exact``).
     """
     rig = objective.rig
     V = rig.pose(angles) if vertices is None else vertices
@@ -66,6 +69,7 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         "risky_area": float(risky_area(V, rig.faces, rig.up, angle)),
         "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
     }
+    out |= objective.standing.measures(rig.transforms(angles), V)
     if exact:
         out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
     return out
@@ -100,14 +104,16 @@ def build_report(rig, result) -> dict:
     report : dict
         Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
         printer's threshold ``result.settings.overhang_angle``), their
-        ``reduction_percent``, the largest vertex displacement, the angles,
-        runtime, settings and convergence history.
+        ``reduction_percent``, the largest and RMS vertex displacement, each
+        bone's rotation (one angle, degrees) and the largest, the Euler
+        angles, runtime, settings and convergence history.
     """
     objective, angle = result.objective, result.settings.overhang_angle
     before = pose_measures(objective, rig.rest_angles(), overhang_angle=angle)
     after = pose_measures(objective, result.angles, overhang_angle=angle)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
+    turned = np.degrees(objective.prior.angles(result.angles))
     return {
         "model": rig.name,
         "vertices": int(len(rig.vertices)),
@@ -124,6 +130,10 @@ def build_report(rig, result) -> dict:
         },
         "max_vertex_displacement": float(displacement.max()),
         "max_vertex_displacement_relative_to_height": float(displacement.max() / height) if height else None,
+        "rms_vertex_displacement_relative_to_height": float(np.sqrt(np.mean(displacement ** 2)) / height)
+        if height else None,
+        "bone_rotation_deg": [round(float(a), 4) for a in turned],
+        "largest_rotation_deg": float(turned.max()),
         "angles_deg": np.degrees(result.angles).round(4).tolist(),
         "runtime_seconds": float(result.runtime_seconds),
         "interrupted": bool(result.interrupted),

@@ -43,6 +43,10 @@ JOINT_OUTSIDE_TOLERANCE = 0.03
 #: How deep inside a moved joint is put, as a fraction of the model's height.
 JOINT_INSIDE_MARGIN = 0.005
 
+#: Surface vertices within this fraction of the model's height of its lowest
+#: point rest on the build plate (:attr:`Rig.contact_vertices`).
+CONTACT_TOLERANCE = 0.01
+
 #: Default settings of the weight computation.
 SAMPLES_PER_BONE = 10
 BBW_ITERATIONS = 10
@@ -95,10 +99,61 @@ class Rig:
         """(n, m) float64: skinning weights of the surface vertices."""
         return self.tet_weights[: len(self.vertices)]
 
+    # ------------------------------------------------- contact and kinematic tree
     @cached_property
+    def contact_vertices(self) -> np.ndarray:
+        """(n,) bool: surface vertices resting on the build plate in the rest pose.
+
+        Those within :data:`CONTACT_TOLERANCE` of the model's height of its
+        lowest point along ``up``.
+        """
+        h = self.vertices @ self.up
+        return h <= h.min() + CONTACT_TOLERANCE * (h.max() - h.min())
+
+    @cached_property
+    def contact_bones(self) -> np.ndarray:
+        """(m,) bool: the bones that dominate (largest weight on) a contact vertex."""
+        mask = np.zeros(self.bone_count, bool)
+        mask[np.unique(np.argmax(self.weights[self.contact_vertices], axis=1))] = True
+        return mask
+
+    @cached_property
+    def anchored_bones(self) -> np.ndarray:
+        """(m,) bool: the contact bones and the bones joining them (:func:`~supportless.kinematics.connecting_bones`).
+
+        The search keeps these where they are by default; the rest of the body
+        moves relative to them.
+        """
+        return kin.connecting_bones(self.bones, self.contact_bones)
+
+    @cached_property
+    def root_bone(self) -> int:
+        """The bone the kinematic tree hangs from: the anchored bone nearest the skeleton's root."""
+        parents = kin.bone_parents(self.bones)
+        depth = np.zeros(self.bone_count, np.int64)
+        for b in kin.topological_order(parents):
+            depth[b] = 0 if parents[b] < 0 else depth[parents[b]] + 1
+        anchored = np.flatnonzero(self.anchored_bones)
+        return int(anchored[np.argmin(depth[anchored])])
+
+    @cached_property
+    def _tree(self) -> tuple[np.ndarray, np.ndarray]:
+        return kin.reroot(self.bones, kin.bone_parents(self.bones), self.root_bone)
+
+    @property
     def parents(self) -> np.ndarray:
-        """(m,) int64: parent bone of each bone, -1 for roots."""
-        return kin.bone_parents(self.bones)
+        """(m,) int64: parent bone of each bone in the kinematic tree, -1 for roots.
+
+        The skeleton's tree re-rooted at :attr:`root_bone`, so a chain resting
+        on the plate by its end (a hand) moves about that contact rather than
+        about the skeleton's root.
+        """
+        return self._tree[0]
+
+    @property
+    def pivots(self) -> np.ndarray:
+        """(m,) int64: the joint each bone turns about (shared with its parent)."""
+        return self._tree[1]
 
     @cached_property
     def order(self) -> np.ndarray:
@@ -131,7 +186,7 @@ class Rig:
         -------
         transforms : (P, m, d, d+1) or (m, d, d+1) float64
         """
-        return kin.forward_kinematics(self.joints, self.bones, angles, self.parents, self.order)
+        return kin.forward_kinematics(self.joints, self.bones, angles, self.parents, self.order, self.pivots)
 
     def pose(self, angles: np.ndarray) -> np.ndarray:
         """Posed surface vertices for a batch of poses.

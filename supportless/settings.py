@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, Objective
+from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective
 from .rig import Rig
 
-__all__ = ["OVERHANG_MARGIN", "SearchSettings", "angle_layout", "plate_bones", "resolve_fixed_bones"]
+__all__ = ["OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_bones"]
 
 #: Degrees added to the overhang threshold during the search. A search that
 #: counts faces as risky only up to the printer's threshold parks them just
@@ -72,6 +72,15 @@ class SearchSettings:
     exact_intersections : bool
         Reject candidates for the swarm's best whose surface has intersecting
         triangles (CGAL's exact test, 3D).
+    w_prior : float
+        Weight of the natural-pose prior (:mod:`supportless.prior`).
+    joint_limit : float
+        Largest rotation of a joint, degrees, as one (geodesic) angle.
+    limits : tuple of str
+        Per-bone limits ``"BONE=DEGREES"`` (1-based bone numbers), e.g. ``("5=15",)``.
+    keep_standing : bool
+        Reject poses that touch the plate with a new part or fall over
+        (:mod:`supportless.standing`).
     clusters : int or None
         Rotation clusters of the reduced ARAP energy.
     resolution : int
@@ -94,13 +103,17 @@ class SearchSettings:
     free: tuple = ()
     preset: str = "standard"
     exact_intersections: bool = True
+    w_prior: float = W_PRIOR
+    joint_limit: float = 30.0
+    limits: tuple = ()
+    keep_standing: bool = True
     clusters: int | None = 100
     resolution: int = 192
     backend: str = "fast"
 
     def __post_init__(self):
         # bone lists arrive as lists, tuples or one comma-separated string
-        for name in ("fix", "free"):
+        for name in ("fix", "free", "limits"):
             value = getattr(self, name)
             if isinstance(value, str):
                 value = [value]
@@ -112,6 +125,16 @@ class SearchSettings:
             raise ValueError(f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
         if self.particles < 1 or self.iterations < 0:
             raise ValueError("particles must be at least 1 and iterations at least 0")
+        if not 0.0 < self.joint_limit <= 180.0:
+            raise ValueError(f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
+        for item in self.limits:
+            _bone, _, value = item.partition("=")
+            try:
+                ok = 0.0 <= float(value) <= 180.0
+            except ValueError:
+                ok = False
+            if not ok:
+                raise ValueError(f"joint limit {item!r} is not BONE=DEGREES with 0..180 degrees, e.g. 5=15")
         if not 0.0 <= self.overhang_angle <= 90.0:
             raise ValueError(f"overhang_angle must be within 0..90 degrees, not {self.overhang_angle}")
 
@@ -141,7 +164,22 @@ class SearchSettings:
         return Objective(rig, w_arap=self.w_arap, w_overhang=self.w_overhang, w_intersect=self.w_intersect,
                          overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
-                         arap_data=arap_data)
+                         arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
+                         keep_standing=self.keep_standing)
+
+    def joint_limits(self, rig: Rig) -> np.ndarray:
+        """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.
+
+        Raises
+        ------
+        ValueError
+            For a bone that is not a bone number of ``rig``.
+        """
+        out = np.full(rig.bone_count, float(self.joint_limit))
+        for item in self.limits:
+            bone, _, value = item.partition("=")
+            out[_bone_index(bone, rig.bone_count)] = float(value)
+        return out
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
         """Which bones keep their rotation, (m,) bool (see :func:`resolve_fixed_bones`)."""
@@ -164,33 +202,13 @@ class SearchSettings:
 # --------------------------------------------------------------------------- #
 # which bones the search rotates
 # --------------------------------------------------------------------------- #
-def plate_bones(rig: Rig, tolerance: float = 0.01) -> np.ndarray:
-    """Bones whose skin touches the build plate in the rest pose.
-
-    Parameters
-    ----------
-    rig : Rig
-    tolerance : float
-        Vertices within ``tolerance`` × the model's height of the lowest point
-        count as touching.
-
-    Returns
-    -------
-    mask : (m,) bool
-        The bones that dominate (largest weight on) a touching vertex.
-    """
-    h = rig.vertices @ rig.up
-    touching = h <= h.min() + tolerance * (h.max() - h.min())
-    mask = np.zeros(rig.bone_count, bool)
-    mask[np.unique(np.argmax(rig.weights[touching], axis=1))] = True
-    return mask
-
-
 def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None) -> np.ndarray:
     """Which bones keep their rest rotation during the search.
 
-    By default the bones touching the build plate and every bone above them
-    in the hierarchy (so the parts on the plate stay where they are).
+    By default the bones resting on the build plate and the bones joining
+    them (:attr:`Rig.anchored_bones`): the parts on the plate stay where they
+    are and the rest of the body moves relative to them, about the contact
+    (the rig's kinematic tree hangs from it).
 
     Parameters
     ----------
@@ -203,27 +221,32 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
     Returns
     -------
     fixed : (m,) bool
+
+    Raises
+    ------
+    ValueError
+        For a name that is not a bone number or ``"all"``.
     """
     m = rig.bone_count
-    fixed = plate_bones(rig)
-    for b in np.flatnonzero(fixed.copy()):
-        p = rig.parents[b]
-        while p >= 0:
-            fixed[p] = True
-            p = rig.parents[p]
+    fixed = rig.anchored_bones.copy()
     for names, value in ((fix, True), (free, False)):
         for name in names or []:
             if str(name).lower() == "all":
                 fixed[:] = value
                 continue
-            try:
-                b = int(name) - 1
-            except ValueError:
-                raise ValueError(f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
-            if not 0 <= b < m:
-                raise ValueError(f"bone {name} is out of range 1..{m}")
-            fixed[b] = value
+            fixed[_bone_index(name, m)] = value
     return fixed
+
+
+def _bone_index(name, m: int) -> int:
+    """0-based index of a 1-based bone number given as text; ValueError otherwise."""
+    try:
+        b = int(name) - 1
+    except ValueError:
+        raise ValueError(f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
+    if not 0 <= b < m:
+        raise ValueError(f"bone {name} is out of range 1..{m}")
+    return b
 
 
 def angle_layout(rig: Rig, fixed: np.ndarray) -> np.ndarray:

@@ -253,3 +253,50 @@ def test_public_api_names():
     assert sl.forward_kinematics is kin.forward_kinematics
     assert sl.lbs_matrix is kin.lbs_matrix
     assert sl.skin is kin.skin
+
+
+# ---------------------------------------------------------------- re-rooting
+# a chain of joints 0-1-2-3 with a branch 1-4: bones 0 (0-1), 1 (1-2), 2 (2-3), 3 (1-4)
+CHAIN_J = np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 2.0, 0.0], [0.0, 3.0, 0.0], [1.0, 1.0, 0.0]])
+CHAIN_B = np.array([[0, 1], [1, 2], [2, 3], [1, 4]])
+
+
+def test_reroot_reverses_the_path_to_the_old_root():
+    parents = kin.bone_parents(CHAIN_B)
+    np.testing.assert_array_equal(parents, [-1, 0, 1, 0])
+    new, pivots = kin.reroot(CHAIN_B, parents, 2)
+    np.testing.assert_array_equal(new, [1, 2, -1, 0])
+    np.testing.assert_array_equal(pivots, [1, 2, 2, 1])  # reversed bones turn about their tips
+    same, pivots0 = kin.reroot(CHAIN_B, parents, 0)  # re-rooting at the root changes nothing
+    np.testing.assert_array_equal(same, parents)
+    np.testing.assert_array_equal(pivots0, CHAIN_B[:, 0])
+
+
+def test_rerooted_kinematics_turns_the_chain_about_the_anchor():
+    """With bone 2 as the root, turning bone 1 swings bones 0 and 3 about joint 2; bone 2 stays."""
+    parents, pivots = kin.reroot(CHAIN_B, kin.bone_parents(CHAIN_B), 2)
+    order = kin.topological_order(parents)
+    A = np.zeros((4, 3))
+    A[1] = [0.0, 0.0, np.pi / 2]
+    T = kin.forward_kinematics(CHAIN_J, CHAIN_B, A, parents, order, pivots)
+    np.testing.assert_allclose(T[2], np.hstack([np.eye(3), np.zeros((3, 1))]), atol=1e-15)
+    J = kin.posed_joints(CHAIN_J, CHAIN_B, T)
+    np.testing.assert_allclose(J[2:4], CHAIN_J[2:4], atol=1e-12)  # the anchor bone's joints stay
+    # joint 1 swings a quarter turn about joint 2 (0, 2, 0): from (0, 1, 0) to (1, 2, 0)
+    np.testing.assert_allclose(J[1], [1.0, 2.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(J[0] - J[1]), 1.0, atol=1e-12)  # bones keep their length
+    # every bone moves its joints as a rigid body: each shared joint agrees between the bones that hold it
+    for b in range(4):
+        for c in range(4):
+            for joint in set(CHAIN_B[b]) & set(CHAIN_B[c]):
+                p = CHAIN_J[joint]
+                np.testing.assert_allclose(T[b, :, :3] @ p + T[b, :, 3], T[c, :, :3] @ p + T[c, :, 3], atol=1e-12)
+
+
+def test_connecting_bones_is_the_chain_between_the_contacts():
+    np.testing.assert_array_equal(kin.connecting_bones(CHAIN_B, np.array([0, 0, 1, 1], bool)), [0, 1, 1, 1])
+    np.testing.assert_array_equal(kin.connecting_bones(CHAIN_B, np.array([1, 0, 0, 0], bool)), [1, 0, 0, 0])
+    np.testing.assert_array_equal(kin.connecting_bones(CHAIN_B, np.array([1, 0, 0, 1], bool)), [1, 0, 0, 1])
+    # two separate skeletons (a forest) are not joined
+    forest = np.array([[0, 1], [2, 3]])
+    np.testing.assert_array_equal(kin.connecting_bones(forest, np.array([1, 1], bool)), [1, 1])

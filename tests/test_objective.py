@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import supportless as sl
+from supportless.objective import INFEASIBLE
 from supportless.geometry import signed_volume
 
 
@@ -20,7 +21,7 @@ def test_terms_shapes_and_batch_equals_single(rig):
     obj = sl.Objective(rig)
     A = random_angles(rig, 5)
     terms = obj.terms(A)
-    assert set(terms) == {"arap", "overhang", "intersection"}
+    assert set(terms) == {"arap", "overhang", "intersection", "prior", "violation"}
     for v in terms.values():
         assert v.shape == (5,)
     values = obj(A)
@@ -77,9 +78,24 @@ def test_prism_and_column_differ_where_the_body_is_below_an_overhang(rig):
 
 def test_weighted_sum(rig):
     A = random_angles(rig, 3, seed=1)
-    obj = sl.Objective(rig, w_arap=2.0, w_overhang=3.0, w_intersect=5.0)
+    obj = sl.Objective(rig, w_arap=2.0, w_overhang=3.0, w_intersect=5.0, w_prior=7.0)
     t = obj.terms(A)
-    np.testing.assert_allclose(obj(A), 2 * t["arap"] + 3 * t["overhang"] + 5 * t["intersection"])
+    base = 2 * t["arap"] + 3 * t["overhang"] + 5 * t["intersection"] + 7 * t["prior"]
+    np.testing.assert_allclose(obj(A), base + np.where(t["violation"] > 0, INFEASIBLE + t["violation"], 0.0))
+    free = sl.Objective(rig, w_arap=2.0, w_overhang=3.0, w_intersect=5.0, w_prior=7.0, keep_standing=False)
+    np.testing.assert_allclose(free(A), base)  # no joint limit by default: no rule broken
+
+
+def test_hard_rules_make_a_pose_worse_than_any_that_keeps_them(rig):
+    """A joint past its limit, or a pose that falls over or touches the plate anew, costs INFEASIBLE more."""
+    obj = sl.Objective(rig, joint_limits=20.0)
+    A = np.zeros((3, rig.bone_count, 3))
+    A[1, -1] = np.radians([0.0, 0.0, 15.0])  # within the limit
+    A[2, -1] = np.radians([0.0, 0.0, 25.0])  # 5 degrees past it
+    t = obj.terms(A)
+    assert t["violation"][1] == 0.0
+    assert t["violation"][2] >= np.radians(5.0) - 1e-12
+    assert obj(A)[2] > INFEASIBLE > obj(A)[1]
 
 
 def test_normalised_terms_are_scale_free(rig, tmp_path):

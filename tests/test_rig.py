@@ -9,6 +9,8 @@ import pytest
 
 import supportless as sl
 from supportless import kinematics as kin
+from supportless import rig as rig_mod
+from supportless.errors import InputError
 from supportless.io import write_dmat, write_tet_mesh
 from supportless.geometry import signed_volume
 
@@ -274,3 +276,84 @@ def test_changed_tet_mesh_misses_the_cache(tmp_path, branch_files, branch_rig):
     second = sl.load_rig(branch_files["mesh"], branch_files["skeleton"], tets=tets, cache_dir=cache)
     assert second.info["from_cache"] is False
     assert not np.array_equal(second.tet_vertices, first.tet_vertices)
+
+
+# ------------------------------------------------------------- joints on the skin
+def _branch_with_tip(offset_fraction):
+    """The branch figure with its head-tip joint put ``offset_fraction`` of the height above the top."""
+    V, F, J, B = sl.demo_figure("branch")
+    height = np.ptp(V[:, 1])
+    J = J.copy()
+    J[3] = [0.0, V[:, 1].max() + offset_fraction * height, 0.0]
+    return V, F, J, B, height
+
+
+def test_a_joint_just_outside_is_moved_inside_with_a_warning():
+    import igl
+
+    V, F, J, B, height = _branch_with_tip(0.01)
+    rig = sl.prepare_rig(V, F, J, B, up="y")
+    assert len(rig.info["warnings"]) == 1
+    warning = rig.info["warnings"][0]
+    assert warning.startswith("joint 4 lay 1.00 % of the model's height outside") and "bone 3" in warning
+    depth = -igl.signed_distance(rig.joints[3:4], rig.vertices, rig.faces)[0][0]
+    assert depth >= rig_mod.JOINT_INSIDE_MARGIN * height  # inside by the margin
+    # moved along its bone, towards the joint it connects to
+    along = (rig.joints[3] - J[1]) / np.linalg.norm(J[3] - J[1])
+    np.testing.assert_allclose(along / np.linalg.norm(along), (J[3] - J[1]) / np.linalg.norm(J[3] - J[1]), atol=1e-12)
+    np.testing.assert_array_equal(rig.joints[:3], J[:3])  # the others stay
+
+
+def test_a_joint_far_outside_is_refused():
+    V, F, J, B, _ = _branch_with_tip(0.10)
+    with pytest.raises(InputError, match=r"joint 4 .* 10\.0 % of the model's height outside"):
+        sl.prepare_rig(V, F, J, B, up="y")
+
+
+def test_moved_joints_and_their_warning_survive_the_cache(tmp_path):
+    V, F, J, B, _ = _branch_with_tip(0.01)
+    sl.write_mesh(tmp_path / "b.stl", V, F)
+    sl.write_tgf(tmp_path / "b.tgf", J, B)
+    first = sl.load_rig(tmp_path / "b.stl", cache_dir=tmp_path / "cache")
+    second = sl.load_rig(tmp_path / "b.stl", cache_dir=tmp_path / "cache")
+    assert second.info["from_cache"]
+    assert second.info["warnings"] == first.info["warnings"] and len(first.info["warnings"]) == 1
+    np.testing.assert_array_equal(second.joints, first.joints)
+
+
+# ------------------------------------------------------------------ contact
+def _tipped_branch():
+    """The branch figure turned so only the arm's end rests on the plate (a chain lying on its hand)."""
+    V, F, J, B = sl.demo_figure("branch")
+    a = np.radians(-110.0)
+    R = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    V, J = V @ R.T, J @ R.T
+    lift = V[:, 1].min()
+    return V - [0.0, lift, 0.0], F, J - [0.0, lift, 0.0], B
+
+
+def test_a_chain_resting_on_its_end_hangs_from_that_end():
+    rig = sl.prepare_rig(*_tipped_branch(), up="y")
+    np.testing.assert_array_equal(rig.contact_bones, [False, True, False])  # the arm's end is the contact
+    np.testing.assert_array_equal(rig.anchored_bones, [False, True, False])
+    assert rig.root_bone == 1
+    np.testing.assert_array_equal(rig.parents, [1, -1, 0])  # the stem hangs from the arm, the head from the stem
+    np.testing.assert_array_equal(rig.pivots, [1, 1, 1])
+    # turning the stem moves it and the head about the shared joint; the arm and its contact stay
+    angles = np.zeros((3, 3))
+    angles[0] = [0.0, 0.0, 0.3]
+    V = rig.pose(angles)
+    on_plate = rig.contact_vertices
+    # contact vertices carry a trace of the stem's weight (bounded biharmonic weights are smooth): they move
+    # by 4e-7 of the height here, measured
+    np.testing.assert_allclose(V[on_plate], rig.vertices[on_plate], atol=1e-5 * np.ptp(rig.vertices))
+    assert np.abs(V - rig.vertices).max() > 1.0
+
+
+def test_default_search_moves_a_chain_resting_on_its_end():
+    rig = sl.prepare_rig(*_tipped_branch(), up="y")
+    fixed = sl.SearchSettings().fixed_bones(rig)
+    np.testing.assert_array_equal(fixed, [False, True, False])
+    result = sl.optimize(rig, particles=16, iterations=6, seed=0)
+    assert np.abs(result.angles[~fixed]).max() > 0  # the free bones moved
+    assert result.value < float(result.objective(rig.rest_angles()))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.objective import W_ARAP, W_INTERSECT, W_OVERHANG
-from supportless.settings import SearchSettings, angle_layout, plate_bones, resolve_fixed_bones
+from supportless.objective import INFEASIBLE, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR
+from supportless.settings import SearchSettings, angle_layout, resolve_fixed_bones
 
 
 def test_defaults_and_frozen():
@@ -48,19 +48,18 @@ def test_objective_is_built_from_the_settings_and_shares_operators(branch_rig):
     A = np.random.default_rng(0).uniform(-0.4, 0.4, (3, branch_rig.bone_count, 3))
     t1, t2 = obj.terms(A), again.terms(A)
     np.testing.assert_array_equal(t1["arap"], t2["arap"])
-    np.testing.assert_array_equal(again(A), 3.0 * t2["arap"] + 2.0 * t2["overhang"] + W_INTERSECT * t2["intersection"])
+    expected = (3.0 * t2["arap"] + 2.0 * t2["overhang"] + W_INTERSECT * t2["intersection"]
+                + W_PRIOR * t2["prior"])
+    np.testing.assert_array_equal(again(A), expected + np.where(t2["violation"] > 0, INFEASIBLE + t2["violation"], 0))
 
 
-def test_plate_bones_fixed_by_default(branch_rig):
+def test_the_bones_on_the_plate_are_fixed_by_default(branch_rig, tpose_rig):
+    for rig in (branch_rig, tpose_rig):
+        fixed = resolve_fixed_bones(rig)
+        np.testing.assert_array_equal(fixed, rig.anchored_bones)
+        assert rig.contact_bones.any() and not fixed.all()
+        np.testing.assert_array_equal(SearchSettings().fixed_bones(rig), fixed)
     rig = branch_rig
-    fixed = resolve_fixed_bones(rig)
-    touching = plate_bones(rig)
-    assert touching.any()
-    # every fixed-by-default bone touches the plate or is an ancestor of one that does
-    for b in np.flatnonzero(fixed):
-        assert touching[b] or any(touching[c] for c in range(rig.bone_count) if b in _ancestors(rig.parents, c))
-    assert not fixed.all()
-    np.testing.assert_array_equal(SearchSettings().fixed_bones(rig), fixed)
     assert not resolve_fixed_bones(rig, free=["all"]).any()
     assert resolve_fixed_bones(rig, fix=[str(rig.bone_count)])[-1]
     with pytest.raises(ValueError, match="out of range"):
@@ -69,12 +68,15 @@ def test_plate_bones_fixed_by_default(branch_rig):
         resolve_fixed_bones(rig, fix=["arm"])
 
 
-def _ancestors(parents, b):
-    out, p = [], parents[b]
-    while p >= 0:
-        out.append(p)
-        p = parents[p]
-    return out
+def test_joint_limits_per_bone(branch_rig):
+    s = SearchSettings(joint_limit=25.0, limits=("2=10", "3=40"))
+    np.testing.assert_array_equal(s.joint_limits(branch_rig), [25.0, 10.0, 40.0])
+    np.testing.assert_array_equal(s.objective(branch_rig).prior.limits, np.radians([25.0, 10.0, 40.0]))
+    with pytest.raises(ValueError, match="out of range"):
+        SearchSettings(limits=("9=10",)).joint_limits(branch_rig)
+    for bad in ("2", "2=x", "2=200"):
+        with pytest.raises(ValueError, match="BONE=DEGREES"):
+            SearchSettings(limits=(bad,))
 
 
 def test_angle_layout_three_angles_in_3d_one_in_2d(branch_rig):
