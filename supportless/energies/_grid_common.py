@@ -18,7 +18,7 @@ material, 2 it enters through a risky face (``n . up < -tau``).
 Numba caches each file's kernels on their own: a kernel in another file that
 calls a helper from here keeps its cached machine code after this file
 changes.  After editing this file, delete the numba cache files
-(``supportless/energies/__pycache__/*.nbi`` and ``*.nbc``).
+(``supportless/energies/__pycache__/*.nb[ci]``).
 """
 
 from __future__ import annotations
@@ -153,7 +153,7 @@ def edge(ax, ay, bx, by):
 
 @njit(cache=True, inline="always")
 def inside(e, px, py):
-    """True when ``(px, py)`` is strictly on the left of the canonical edge ``e`` (:func:`edge`), ties broken."""
+    """True when ``(px, py)`` is on the left of the canonical edge ``e`` (6 floats, :func:`edge`), ties broken."""
     ox, oy, dx, dy, flip, tie = e
     v = dx * (py - oy) - dy * (px - ox)
     if v == 0.0:
@@ -243,7 +243,8 @@ def risk_code(cosf, tau):
 
 @njit(cache=True, inline="always")
 def _sort_segment(zs, cs, s0, s1):
-    """Insertion sort of ``zs[s0:s1]`` (the crossings of one ray, few) with ``cs`` alongside; stable."""
+    """Stable insertion sort of ``zs[s0:s1]`` (float64 heights of one ray's few
+    crossings), with ``cs`` (int8 codes) alongside."""
     for i in range(s0 + 1, s1):
         zk = zs[i]
         ck = cs[i]
@@ -258,7 +259,7 @@ def _sort_segment(zs, cs, s0, s1):
 
 @njit(cache=True, inline="always")
 def _sweep_ray(zs, cs, s0, s1, zplate, inter, sup):
-    """Sweep the sorted crossings ``zs[s0:s1]`` (codes ``cs``) of one ray upwards.
+    """Sweep the sorted crossings ``zs[s0:s1]`` (float64, codes ``cs`` int8) of one ray upwards.
 
     Adds to ``inter`` the length inside two or more layers of material, and
     to ``sup`` the support column under every risky face met from air: down

@@ -75,9 +75,16 @@ def _face_code(orient, nxv, nyv, nzv, tau, support):
 def _flag_rays(cnt, sat, nx, ny):
     """Between the two passes: keep the rays with two or more entering crossings.
 
-    The others get the count ``_NOT_FLAGGED``; ``sat`` ((ny + 1) * (nx + 1)
-    int32) becomes the summed-area table of the flagged rays: ``sat[j * (nx
-    + 1) + i]`` counts those in ``[0, j) x [0, i)``.
+    Parameters
+    ----------
+    cnt : (>= nx * ny,) int32
+        Crossings per ray after the first pass; the rays not kept get
+        ``_NOT_FLAGGED``, far below any count.
+    sat : (>= (ny + 1) * (nx + 1),) int32
+        Filled with the summed-area table of the kept rays: ``sat[j * (nx +
+        1) + i]`` counts those in ``[0, j) x [0, i)``.
+    nx, ny : int
+        Grid size.
     """
     w = nx + 1
     for i in range(w):
@@ -96,7 +103,7 @@ def _flag_rays(cnt, sat, nx, ny):
 
 @njit(cache=True, inline="always")
 def _flagged_in_box(sat, nx, i_lo, i_hi, j_lo, j_hi):
-    """Number of flagged rays (:func:`_flag_rays`) in the pixel box ``[i_lo, i_hi] x [j_lo, j_hi]``."""
+    """Number of flagged rays in the pixel box ``[i_lo, i_hi] x [j_lo, j_hi]`` (``sat`` of :func:`_flag_rays`)."""
     w = nx + 1
     return (sat[(j_hi + 1) * w + i_hi + 1] - sat[j_lo * w + i_hi + 1] - sat[(j_hi + 1) * w + i_lo]
             + sat[j_lo * w + i_lo])
@@ -104,10 +111,28 @@ def _flagged_in_box(sat, nx, i_lo, i_hi, j_lo, j_hi):
 
 @njit(cache=True)
 def _decide_near_edges(X, F, ubuf, ufac, nu, pix, cc, cnt, nx, u0, w0, cell):
-    """Exact, tie-broken test of the kept crossings ``ubuf[:nu]`` (of faces ``ufac``) close to an edge.
+    """Exact, tie-broken test of the crossings kept near an edge of their triangle.
 
-    A crossing that fails gets the code -1 (dropped by the sweep) and leaves
-    its ray's count.
+    Parameters
+    ----------
+    X : (n, 3) float64
+        Frame coordinates.
+    F : (f, 3) int64
+        Triangles.
+    ubuf, ufac : (>= nu,) int64
+        The crossings to test (indices into ``pix``/``cc``) and their faces.
+    nu : int
+        Number of crossings to test.
+    pix : (m,) int32
+        Pixel of each crossing.
+    cc : (m,) int8
+        Code of each crossing; set to -1 (dropped by the sweep) when the test fails.
+    cnt : (npix,) int32
+        Crossings per ray; decremented for each dropped crossing.
+    nx : int
+        Grid width.
+    u0, w0, cell : float
+        Grid origin and cell (:func:`._grid_common.grid_layout`).
     """
     for k in range(nu):
         t = ubuf[k]
@@ -260,7 +285,9 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
                 e2 = r2 if wrap else e2 - d2w
                 e3 = r3 if wrap else e3 - d3w
     _decide_near_edges(X, F, ubuf, ufac, nu, pix, cc, cnt, nx, u0, w0, cell)
-    # in face order within a ray, as the reference (rasterised entering faces first when two_pass)
+    # with two passes a ray's entering crossings come before its leaving ones,
+    # not in face order: only tied heights sort differently, and between them
+    # the sweep adds zero lengths
     inter, sup = sweep_rays(pix, zz, cc, m, cnt, npix, 2 if support else 4, zplate, start, zs, cs)
     area = cell * cell
     return inter * area, sup * area, True
@@ -268,12 +295,32 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
 
 @njit(cache=True, parallel=True)
 def _grid3_fast(V, F, Rm, R, tau, support, xbuf, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
-    """Per pose: orientation, frame coordinates (as :func:`.surface.orientation_sign`
-    and :func:`.surface.to_frame`, bit for bit) and :func:`_pose3_fast`.
+    """:func:`_pose3_fast` over a batch, parallel over poses.
 
-    ``V`` (P, n, 3) float64 world-space poses, ``Rm`` (3, 3) the frame
-    (:func:`.surface.frame_matrix`), the buffers have one row per thread.
-    Returns ``out`` (P, 2) float64 and ``ok`` (P,) bool.
+    Each pose's orientation and frame coordinates are computed here, bit for
+    bit as :func:`.surface.orientation_sign` and :func:`.surface.to_frame`.
+
+    Parameters
+    ----------
+    V : (P, n, 3) float64
+        World-space poses.
+    F : (f, 3) int64
+        Triangles.
+    Rm : (3, 3) float64
+        The frame of ``up`` (:func:`.surface.frame_matrix`).
+    R, tau, support
+        As :func:`_pose3_fast`.
+    xbuf : (threads, n, 3) float64
+        Frame coordinates.
+    pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat : (threads, ...)
+        The buffers of :func:`_pose3_fast`, one row per thread.
+
+    Returns
+    -------
+    out : (P, 2) float64
+        Self-intersection and support column volume per pose.
+    ok : (P,) bool
+        False for the poses whose crossings did not fit in the buffers.
     """
     P = V.shape[0]
     n = V.shape[1]

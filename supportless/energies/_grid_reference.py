@@ -30,7 +30,7 @@ __all__ = ["grid_batch"]
 
 @njit(cache=True)
 def _grow(pix, zz, cc):
-    """Twice as long copies of the crossing buffers (pixel, height, code)."""
+    """Twice as long copies of the crossing buffers ``pix`` (k,) int64, ``zz`` (k,) float64, ``cc`` (k,) int8."""
     n = pix.shape[0] * 2
     p2 = np.empty(n, np.int64)
     z2 = np.empty(n, np.float64)
@@ -43,7 +43,11 @@ def _grow(pix, zz, cc):
 
 @njit(cache=True)
 def _sweep(pix, zz, cc, cnt, m, npix, zplate):
-    """:func:`._grid_common.sweep_rays` over every ray with a crossing, with its work space."""
+    """:func:`._grid_common.sweep_rays` over every ray with a crossing, with its work space.
+
+    ``pix`` (>= m,) int64, ``zz`` (>= m,) float64 and ``cc`` (>= m,) int8:
+    the ``m`` crossings; ``cnt`` (npix,) int64: crossings per ray.
+    """
     start = np.empty(npix, np.int64)
     zs = np.empty(m, np.float64)
     cs = np.empty(m, np.int8)
@@ -52,7 +56,9 @@ def _sweep(pix, zz, cc, cnt, m, npix, zplate):
 
 @njit(cache=True, inline="always")
 def _clip_row(e, py, xl, xr, empty):
-    """Narrow the span ``[xl, xr]`` of a pixel row to the inner side of one canonical edge ``e``.
+    """Narrow the span ``[xl, xr]`` of the pixel row at height ``py`` to the inner side of one edge.
+
+    ``e`` is a canonical edge (:func:`._grid_common.edge`, 6 floats).
 
     A horizontal edge (``dy == 0``) does not depend on x: one exact test
     decides the whole row (``empty``). Returns ``(xl, xr, empty)``.

@@ -39,12 +39,18 @@ lowest vertex).  Lengths times the cell area (length in 2D) give volumes.
 
 Implementations
 ---------------
-* :mod:`._grid_reference`: reference numba kernels, parallel over poses (2D;
-  3D fallback);
+* :mod:`._grid_reference`: reference numba kernels, parallel over poses
+  (``backend="fast"`` in 2D; the fallback of the fast kernel in 3D);
 * :mod:`._grid_fast`: the fast 3D numba kernel (``backend="fast"``), the
   same crossings and sweep as the reference, so bit-identical results;
 * :mod:`._grid_numpy`: plain numpy (``backend="numpy"``), the same crossings,
-  sums in another order (equal up to round-off).
+  sums in another order (equal up to round-off);
+* :mod:`._grid_common`: the pieces they share.
+
+Numba's on-disk cache (``cache=True``) checks only the file of each kernel:
+after editing a helper that a kernel in another file calls
+(:mod:`._grid_common`, :func:`.surface.signed_volume3`), delete the cache
+files ``supportless/energies/__pycache__/*.nb[ci]``.
 """
 
 from __future__ import annotations
