@@ -335,12 +335,42 @@ def _draw_skeleton(ax, joints, bones, right, sup):
                edgecolors=[(0.05, 0.15, 0.45)], linewidths=1.0, zorder=12)
 
 
+def _draw_balance(ax, balance, u, right, sup, h0):
+    """Draw the support polygon on the plate and the centre of mass above its projection.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    balance : dict
+        ``centre_of_mass`` (d,) float64 and ``support`` (q, d) float64: the
+        support polygon's corners, in order, on the plate.
+    u, right, sup : numpy.ndarray, shape (d,), dtype float64
+        Up and the screen axes.
+    h0 : float
+        Height of the plate along ``u``.
+    """
+    com = np.asarray(balance["centre_of_mass"], np.float64)
+    poly = np.asarray(balance["support"], np.float64)
+    S = np.c_[poly @ right, poly @ sup]
+    if len(S) >= 3:
+        ax.add_collection(PolyCollection([S], facecolors=[(0.2, 0.75, 0.3, 0.35)],
+                                         edgecolors=[(0.1, 0.5, 0.15)], linewidths=1.5, zorder=1.5))
+    else:
+        ax.plot(S[:, 0], S[:, 1], color=(0.1, 0.5, 0.15), lw=2.5, zorder=1.5)
+    foot = com - (com @ u - h0) * u
+    c, f = np.array([com @ right, com @ sup]), np.array([foot @ right, foot @ sup])
+    ax.plot([c[0], f[0]], [c[1], f[1]], color=(0.1, 0.5, 0.15), lw=1.0, ls="--", zorder=13)
+    ax.scatter([c[0]], [c[1]], s=70, marker="o", c=[(1.0, 1.0, 1.0)], edgecolors=[(0.1, 0.5, 0.15)],
+               linewidths=2.0, zorder=14)
+    ax.scatter([f[0]], [f[1]], s=40, marker="x", c=[(0.1, 0.5, 0.15)], linewidths=2.0, zorder=14)
+
+
 def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
-               title, camera, bounds, aspect):
+               title, camera, bounds, aspect, balance=None):
     """Draw one mesh panel; the arguments are those of :func:`render_mesh`.
 
     ``aspect`` is the panel's width / height in pixels; ``bounds`` None frames
-    the mesh (and joints) alone.
+    the mesh (and joints) alone; ``balance`` is drawn by :func:`_draw_balance`.
     """
     V = np.asarray(vertices, dtype=np.float64)
     F = np.asarray(faces, dtype=np.int64)
@@ -396,6 +426,8 @@ def _draw_mesh(ax, vertices, faces, up, joints, bones, face_colors, risky,
                                          antialiased=True, zorder=2))
     if joints is not None:
         _draw_skeleton(ax, joints, bones, right, sup)
+    if balance is not None:
+        _draw_balance(ax, balance, u, right, sup, float((V @ u).min()))
     if title:
         ax.set_title(title, fontsize=13)
 
@@ -481,7 +513,7 @@ def render_before_after(path, before, after, up, before_skeleton=None,
                         after_skeleton=None, before_risky=None,
                         after_risky=None, titles=("before", "after"),
                         suptitle=None, camera=None, size=(1600, 800),
-                        bounds=None):
+                        bounds=None, before_balance=None, after_balance=None):
     """Write one PNG with the rest pose and the deformed pose side by side.
 
     Both panels share the camera and framing, so sizes are comparable.
@@ -509,6 +541,10 @@ def render_before_after(path, before, after, up, before_skeleton=None,
         ``(width, height)`` of the PNG in pixels.
     bounds : numpy.ndarray, shape (2, d), dtype float64, optional
         Shared world box; default encloses both meshes (and skeletons).
+    before_balance, after_balance : dict, optional
+        ``{"centre_of_mass": (d,) float64, "support": (q, d) float64}``: the
+        centre of mass (a ring, with its projection on the plate) and the
+        support polygon's corners on the plate (shaded green).
 
     Returns
     -------
@@ -529,14 +565,14 @@ def render_before_after(path, before, after, up, before_skeleton=None,
         fig.suptitle(suptitle, fontsize=15, y=0.985)
     panel_h = top * (0.93 if titles else 1.0)
     aspect = (size[0] / 2) / (size[1] * panel_h)
-    panels = ((Vb, Fb, before_skeleton, before_risky),
-              (Va, Fa, after_skeleton, after_risky))
-    for i, (V, F, sk, risky) in enumerate(panels):
+    panels = ((Vb, Fb, before_skeleton, before_risky, before_balance),
+              (Va, Fa, after_skeleton, after_risky, after_balance))
+    for i, (V, F, sk, risky, balance) in enumerate(panels):
         ax = _panel_axes(fig, (0.5 * i, 0.0, 0.5, top), bool(titles))
         joints, bones = (None, None) if sk is None else sk
         title = titles[i] if titles else None
         _draw_mesh(ax, V, F, up, joints, bones, None, risky, title, camera,
-                   bounds, aspect)
+                   bounds, aspect, balance)
     return _save_atomic(fig, path)
 
 

@@ -150,7 +150,7 @@ def _cpu_count() -> int:
 
 
 def write_pictures(folder, rig, result, report: dict | None = None) -> list[tuple[str, str]]:
-    """Before/after renders (same camera, risky faces red, skeleton drawn) and a convergence plot.
+    """Before/after renders (same camera, risky faces red, skeleton, balance) and a convergence plot.
 
     Risky faces are those past the printer's threshold
     (``result.settings.overhang_angle``), as the report counts them.
@@ -178,13 +178,22 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
     joints_posed = rig.posed_joints(result.angles) + shift_posed
     risky = rig.dim == 3
     change = (report or {}).get("reduction_percent", {}).get("support_prism")
+    standing = result.objective.standing
+    corners = standing.support_corners()
+
+    def balance(angles, shift):
+        return {"centre_of_mass": standing.centre_of_mass(rig.transforms(angles)) + shift,
+                "support": corners + shift}
+
     before_after = render_before_after(
         folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
         before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
         before_risky=risky_faces(rest, rig.faces, rig.up, angle) if risky else None,
         after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
         titles=("rest pose", "found pose"),
-        suptitle=f"{rig.name}: support (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg)")
+        before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
+        suptitle=f"{rig.name}: support (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg); "
+                 "green = support polygon, ring = centre of mass")
     terms = {k: v for k, v in result.term_history.items() if len(v)}
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")

@@ -26,6 +26,7 @@ import numpy as np
 
 from .energies.balance import (centre_of_mass, centre_of_mass_operator, new_contact_depth, stability_margin,
                                support_polygon)
+from .energies.surface import plane_basis
 from .rig import CONTACT_TOLERANCE, Rig
 
 __all__ = ["CLEARANCE", "STAND_MARGIN", "Standing"]
@@ -84,6 +85,10 @@ class Standing:
         if self.rest_margin > 0:
             return min(self.rest_margin, STAND_MARGIN * self.height)
         return self.rest_margin
+
+    def support_corners(self) -> np.ndarray:
+        """(q, d) float64: the support polygon's corners in the rest frame, on the plate."""
+        return self.polygon @ plane_basis(self.rig.up) + self.plate * self.rig.up
 
     def centre_of_mass(self, transforms: np.ndarray) -> np.ndarray:
         """Centres of mass of posed solids, (P, d) or (d,) float64, from bone transforms (P, m, d, d+1)."""

@@ -55,6 +55,25 @@ def test_before_after_and_2d(tmp_path, branch):
     assert mpimg.imread(out2)[..., :3].std() > 0.05
 
 
+def green_pixels(img):
+    rgb = img[..., :3]
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return int(np.sum((g > 0.3) & (g > 1.6 * r) & (g > 1.3 * b)))
+
+
+def test_balance_marks_are_drawn_only_when_given(tmp_path, branch):
+    """The support polygon (green) and the centre of mass appear in the panel that has them."""
+    V, F, J, B = branch
+    up = np.array([0.0, 1.0, 0.0])
+    support = np.array([[-3.0, 0.0, -3.0], [3.0, 0.0, -3.0], [3.0, 0.0, 3.0], [-3.0, 0.0, 3.0]])
+    out = render_before_after(tmp_path / "ba.png", (V, F), (V, F), up, size=(600, 300),
+                              after_balance={"centre_of_mass": np.array([0.0, 12.0, 0.0]), "support": support})
+    img = mpimg.imread(out)
+    left, right = img[:, :300], img[:, 300:]
+    assert green_pixels(left) == 0
+    assert green_pixels(right) > 30
+
+
 def test_convergence_plot(tmp_path):
     out = plot_convergence(tmp_path / "c.png", np.linspace(1, 0.3, 30),
                            terms={"overhang": np.linspace(1, 0.25, 30), "arap": np.linspace(0, 0.05, 30)},
