@@ -133,6 +133,8 @@ def _search_options(f):
                      help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
         click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
                      help="Reject poses that touch the plate with a new part or would fall over."),
+        click.option("--symmetric", is_flag=True, default=d.symmetric,
+                     help="Keep left/right pairs of bones mirror images (found from the rest skeleton)."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]

@@ -19,7 +19,8 @@ from .energies.exact import intersecting_face_pairs
 from .geometry import place_on_plate
 from .objective import Objective
 from .rig import Rig
-from .settings import PSO_PRESETS, SearchSettings, angle_layout
+from .settings import PSO_PRESETS, SearchSettings
+from .symmetry import PoseLayout, require_mirror
 
 __all__ = ["PoseResult", "SwarmResult", "optimize", "particle_swarm"]
 
@@ -263,19 +264,13 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     settings = (settings or SearchSettings()).replace(**changes)
     if objective is None:
         objective = settings.objective(rig)
-    fixed = settings.fixed_bones(rig)
-    free_mask = angle_layout(rig, fixed)
-    k = int(free_mask.sum())
-    limit = np.radians(settings.max_angle)
-
     base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
     if base.shape != (rig.bone_count, 3):
         raise ValueError(f"start pose has {len(base)} bones, the rig {rig.bone_count}")
-
-    def to_angles(X):
-        A = np.repeat(base[None], len(X), axis=0)
-        A[:, free_mask] = X
-        return A
+    mirror = require_mirror(rig) if settings.symmetric else None
+    layout = PoseLayout(rig, settings.fixed_bones(rig), base, mirror)
+    fixed, k, to_angles = layout.fixed, layout.count, layout.to_angles
+    limit = np.radians(settings.max_angle)
 
     def f(X, bound):
         return objective.bounded(to_angles(X), bound)
@@ -300,7 +295,7 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
 
         feasible = _Timed(no_intersection, stats, "exact")
 
-    initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), base[free_mask]])
+    initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), layout.from_angles(base)])
     if k == 0:
         swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
     else:

@@ -81,6 +81,8 @@ class SearchSettings:
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.standing`).
+    symmetric : bool
+        Keep left/right pairs of bones mirror images (:mod:`supportless.symmetry`).
     clusters : int or None
         Rotation clusters of the reduced ARAP energy.
     resolution : int
@@ -107,6 +109,7 @@ class SearchSettings:
     joint_limit: float = 30.0
     limits: tuple = ()
     keep_standing: bool = True
+    symmetric: bool = False
     clusters: int | None = 100
     resolution: int = 192
     backend: str = "fast"

@@ -1,0 +1,47 @@
+"""Mirror planes of skeletons and symmetric poses."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import supportless as sl
+from supportless.errors import InputError
+from supportless.kinematics import euler_to_matrix
+from supportless.symmetry import PoseLayout, find_mirror, require_mirror
+
+
+def test_the_tpose_mirrors_left_onto_right(tpose_rig):
+    mirror = find_mirror(tpose_rig)
+    np.testing.assert_allclose(np.abs(mirror.normal), [1.0, 0.0, 0.0], atol=1e-12)
+    # arms (bones 4-6 and 7-9) and legs (10-12 and 13-15) swap; the spine, neck and head stay
+    np.testing.assert_array_equal(mirror.partner + 1, [1, 2, 3, 7, 8, 9, 4, 5, 6, 13, 14, 15, 10, 11, 12])
+
+
+def test_a_skeleton_without_a_mirror_image_has_none(bunny_rig):
+    assert find_mirror(bunny_rig) is None  # the bunny's skeleton is one-sided
+    with pytest.raises(InputError, match="no mirror plane"):
+        require_mirror(bunny_rig)
+
+
+def test_layout_round_trip_and_symmetric_angles(tpose_rig):
+    rig = tpose_rig
+    mirror = find_mirror(rig)
+    layout = PoseLayout(rig, rig.anchored_bones, np.zeros((rig.bone_count, 3)), mirror)
+    X = np.random.default_rng(0).uniform(-0.5, 0.5, (4, layout.count))
+    A = layout.to_angles(X)
+    np.testing.assert_allclose(layout.from_angles(A[1]), X[1], atol=1e-12)
+    R = euler_to_matrix(A)
+    S = mirror.reflection
+    for b in range(rig.bone_count):
+        np.testing.assert_allclose(S @ R[:, b] @ S, R[:, mirror.partner[b]], atol=1e-12)
+    np.testing.assert_array_equal(layout.to_angles(np.zeros((1, layout.count)))[0], 0.0)  # X = 0 is the rest
+
+
+def test_a_symmetric_search_finds_a_mirror_symmetric_pose(tpose_rig):
+    rig = tpose_rig
+    result = sl.optimize(rig, particles=20, iterations=5, seed=0, symmetric=True)
+    mirror = find_mirror(rig)
+    J = rig.posed_joints(result.angles)
+    image = J - 2.0 * ((J - mirror.point) @ mirror.normal)[:, None] * mirror.normal
+    assert cKDTree(J).query(image)[0].max() < 1e-9 * np.ptp(rig.vertices)
+    assert np.abs(result.angles).max() > 0
