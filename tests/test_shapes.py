@@ -1,104 +1,46 @@
-"""Built-in demo figures: closed, clean, rigged."""
+"""Built-in demo figures: closed, clean, rigged, resting on the plate, deterministic."""
+
+import inspect
 
 import igl
-import igl.copyleft.cgal
 import numpy as np
 import pytest
-import trimesh
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 import supportless as sl
+from supportless import shapes
+from supportless.energies.exact import intersecting_face_pairs
+from supportless.geometry import signed_volume
 from supportless.io import edge_counts
 from supportless.kinematics import bone_parents, topological_order
-from supportless.geometry import signed_volume
-from supportless import shapes
 from supportless.shapes import DEMO_FIGURES, demo_figure
 
-
-@pytest.mark.parametrize("name", ["tpose", "branch"])
-def test_3d_figures_are_closed_manifold_outward_and_clean(name):
-    import igl
-    import igl.copyleft.cgal  # noqa: F401
-
-    V, F, J, B = sl.demo_figure(name)
-    _, counts = edge_counts(F)
-    assert np.all(counts == 2), "every edge shared by exactly two faces"
-    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    assert len(np.unique(directed, axis=0)) == len(directed), "consistent winding"
-    assert signed_volume(V, F) > 0, "outward orientation"
-    IF = igl.copyleft.cgal.remesh_self_intersections(V, F, detect_only=True)[2]
-    assert len(IF) == 0, "no self-intersections"
-    wn = igl.winding_number(V, F, J)
-    assert np.all(wn > 0.99), "every joint inside"
-    assert V[:, 1].min() == 0.0, "stands on y = 0"
-    assert len(F) <= (4000 if name == "tpose" else 1500)
-
-
-@pytest.mark.parametrize("name", ["tpose", "branch", "woody2d"])
-def test_skeletons_are_trees_with_valid_indices(name):
-    V, F, J, B = sl.demo_figure(name)
-    assert B.min() >= 0 and B.max() < len(J)
-    parents = bone_parents(B)
-    topological_order(parents)  # raises on a cycle
-    # each joint is the tip of at most one bone: a tree (or forest)
-    assert len(np.unique(B[:, 1])) == len(B)
-
-
-def test_tpose_arms_are_horizontal_overhangs():
-    V, F, J, B = sl.demo_figure("tpose")
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    n = np.cross(b - a, c - a)
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    height = V[:, 1].max()
-    centroid_y = (a + b + c)[:, 1] / 3
-    downward_high = (n[:, 1] < -0.7) & (centroid_y > 0.5 * height)
-    assert downward_high.sum() > 20
-    # some bones are nearly horizontal (the arms)
-    d = J[B[:, 1]] - J[B[:, 0]]
-    horizontal = np.abs(d[:, 1]) < 0.2 * np.linalg.norm(d, axis=1)
-    assert horizontal.sum() >= 4
-
-
-def test_woody2d_is_a_ccw_planar_mesh_with_one_boundary_loop_and_bone_vertices():
-    V, F, J, B = sl.demo_figure("woody2d")
-    assert V.shape[1] == 2 and J.shape[1] == 2
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    area = 0.5 * ((b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0])
-    assert np.all(area > 0)
-    E, counts = edge_counts(F)
-    boundary = E[counts == 1]
-    assert np.all(counts <= 2)
-    # one closed loop: every boundary vertex has two boundary edges and the loop is connected
-    verts, deg = np.unique(boundary, return_counts=True)
-    assert np.all(deg == 2)
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    A = sp.coo_matrix((np.ones(len(boundary)), (boundary[:, 0], boundary[:, 1])), shape=(len(V), len(V)))
-    n_comp, labels = connected_components(A, directed=False)
-    assert len(np.unique(labels[verts])) == 1
-    # a vertex exactly at every joint
-    d = np.linalg.norm(V[None] - J[:, None], axis=2).min(1)
-    assert np.all(d < 1e-9)
-
-
-@pytest.mark.parametrize("name", DEMO_FIGURES)
-def test_figures_are_deterministic(name):
-    # two real builds (the builders, not demo_figure's cache), and the cached copy
-    first, second = shapes._BUILDERS[name](), shapes._BUILDERS[name]()
-    cached = sl.demo_figure(name)
-    for x, y, z in zip(first, second, cached):
-        assert x is not y
-        np.testing.assert_array_equal(x, y)
-        np.testing.assert_array_equal(x, z)
-    with pytest.raises((KeyError, ValueError)):
-        sl.demo_figure("no-such-figure")
-
-
-# --- further checks ---------------------------------------------------------
-
-
 UP3 = np.array([0.0, 1.0, 0.0])
-FIG3 = ["tpose", "branch"]
+FIG3 = [n for n in DEMO_FIGURES if n != "woody2d"]
+#: Figures whose builder takes a seed that varies the proportions.
+SEEDED = [n for n in FIG3 if "seed" in inspect.signature(shapes._BUILDERS[n]).parameters]
+
+#: The bones nearest to each flat patch of the surface on the plate, by figure:
+#: what a person expects to touch it.
+PLATE_BONES = {
+    "tpose": [11, 14],  # the shins (feet)
+    "apose": [11, 14],
+    "staff": [11, 14],
+    "branch": [0],  # the post's foot
+    "quadruped": [3, 6, 9, 12],  # the four lower legs (paws)
+    "dragon": [3, 6, 9, 12],
+    "bird": [6, 13],  # the two lower legs (feet)
+    "lying": [0],  # the spine (the back)
+    "seated": [0, 12, 15],  # the block and the shins (feet)
+    "arm": [2, 3],  # the palm and the fingers (the hand), with the thumb
+    "tree": [0],  # the trunk
+    "hand": [0],  # the forearm stub
+    "tentacle": [0],  # the base
+}
+
+#: Handles of each surface: the staff and the arms holding it make a loop.
+GENUS = {"staff": 1}
 
 
 def _is_forest(n_joints, bones):
@@ -117,15 +59,58 @@ def _is_forest(n_joints, bones):
     return True
 
 
+def _normals(V, F):
+    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    return N / np.linalg.norm(N, axis=1, keepdims=True)
+
+
+def _bone_points(J, B, n=21):
+    """(m * n, 3) points evenly along every bone, ends included."""
+    t = np.linspace(0.0, 1.0, n)[None, :, None]
+    return (J[B[:, 0]][:, None] * (1.0 - t) + J[B[:, 1]][:, None] * t).reshape(-1, J.shape[1])
+
+
+def _segment_distance(p, a, b):
+    ab = b - a
+    t = np.clip((p - a) @ ab / (ab @ ab), 0.0, 1.0)
+    return float(np.linalg.norm(p - (a + t * ab)))
+
+
+def _check_surface(V, F, J, B, genus=0):
+    """The geometric promises of a 3D figure."""
+    _, counts = edge_counts(F)
+    assert np.all(counts == 2), "every edge shared by exactly two faces"
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    assert len(np.unique(directed, axis=0)) == len(directed), "consistent winding"
+    assert signed_volume(V, F) > 0, "outward orientation"
+    assert len(np.unique(V, axis=0)) == len(V), "no two vertices at one place"
+    n_edges = len(directed) // 2
+    assert len(V) - n_edges + len(F) == 2 - 2 * genus, "one surface of the expected genus"
+    A = sp.coo_matrix((np.ones(len(directed)), (directed[:, 0], directed[:, 1])), shape=(len(V), len(V)))
+    assert connected_components(A, directed=False)[0] == 1, "one piece"
+    assert np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).min() > 1e-8
+    assert intersecting_face_pairs(V, F) == 0, "no self-intersections"
+    # a sum of solid angles over a closed surface: 1 inside up to rounding (4e-16 measured)
+    assert np.all(np.abs(igl.winding_number(V, F, J) - 1.0) < 1e-9), "every joint inside"
+    assert np.sqrt(igl.point_mesh_squared_distance(J, V, F)[0]).min() > 0.5, "joints clear of the skin"
+    assert np.all(np.abs(igl.winding_number(V, F, _bone_points(J, B)) - 1.0) < 1e-9), "bones inside"
+    assert V[:, 1].min() == 0.0, "rests on y = 0"
+
+
+# --- every figure -------------------------------------------------------------
+
+
 def test_names():
-    assert set(DEMO_FIGURES) == {"tpose", "branch", "woody2d"}
+    assert set(DEMO_FIGURES) >= {"tpose", "branch", "woody2d", "apose", "quadruped", "lying", "seated", "arm",
+                                 "tree", "hand", "bird", "tentacle", "dragon", "staff"}
     assert set(shapes._BUILDERS) == set(DEMO_FIGURES)
+    assert set(PLATE_BONES) == set(FIG3)
     with pytest.raises(KeyError):
         demo_figure("nope")
 
 
 @pytest.mark.parametrize("name", DEMO_FIGURES)
-def test_dtypes_and_skeleton(name):
+def test_arrays_and_skeleton(name):
     V, F, J, B = demo_figure(name)
     d = 2 if name == "woody2d" else 3
     assert V.dtype == np.float64 and V.ndim == 2 and V.shape[1] == d
@@ -136,11 +121,64 @@ def test_dtypes_and_skeleton(name):
     assert len(np.unique(F)) == len(V)  # no unreferenced vertices
     assert B.min() >= 0 and B.max() < len(J)
     assert np.all(B[:, 0] != B[:, 1])
-    assert set(np.unique(B).tolist()) == set(range(len(J)))
+    assert set(np.unique(B).tolist()) == set(range(len(J)))  # every joint on a bone
+    # a tree or forest: each joint the tip of at most one bone, no cycles
     assert _is_forest(len(J), B)
-    # feet rest on the plate (cut exactly at y = 0)
-    assert V[:, 1].min() == 0.0
-    assert np.all(J[:, 1] > 0)
+    topological_order(bone_parents(B))  # raises on a cycle
+    assert V[:, 1].min() == 0.0 and np.all(J[:, 1] > 0)
+    # small: quick to prepare and to search
+    assert len(B) <= 25
+    assert len(F) <= 6000
+
+
+@pytest.mark.parametrize("name", FIG3)
+def test_closed_clean_surface_with_the_skeleton_inside(name):
+    _check_surface(*demo_figure(name), genus=GENUS.get(name, 0))
+
+
+@pytest.mark.parametrize("name", FIG3)
+def test_rests_on_the_plate_with_the_expected_parts(name):
+    V, F, J, B = demo_figure(name)
+    flat = F[np.all(V[F][:, :, 1] == 0.0, axis=1)]
+    A = sp.coo_matrix((np.ones(flat.size), (flat.ravel(), np.roll(flat, 1, axis=1).ravel())), shape=(len(V),) * 2)
+    labels = connected_components(A, directed=False)[1]
+    nearest = []
+    for patch in np.unique(labels[np.unique(flat)]):
+        centre = V[labels == patch].mean(axis=0)
+        nearest.append(int(np.argmin([_segment_distance(centre, J[a], J[b]) for a, b in B])))
+    assert sorted(nearest) == PLATE_BONES[name]
+
+
+@pytest.mark.parametrize("name", FIG3)
+def test_real_overhangs_above_the_plate(name):
+    """Downward faces well above the plate (arms, wings, tails, heads...) that posing could turn."""
+    V, F, _, _ = demo_figure(name)
+    N, c = _normals(V, F), V[F].mean(axis=1)
+    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    risky = (N @ UP3 < -np.cos(np.radians(45.0))) & (c[:, 1] > 0.15 * V[:, 1].max())
+    assert area[risky].sum() > 0.02 * area.sum()
+
+
+@pytest.mark.parametrize("name", DEMO_FIGURES)
+def test_figures_are_deterministic(name):
+    # two real builds (the builders, not demo_figure's cache), and the cached copy
+    first, second = shapes._BUILDERS[name](), shapes._BUILDERS[name]()
+    cached = sl.demo_figure(name)
+    for x, y, z in zip(first, second, cached):
+        assert x is not y
+        np.testing.assert_array_equal(x, y)
+        np.testing.assert_array_equal(x, z)
+
+
+@pytest.mark.parametrize("name", SEEDED)
+def test_a_seed_varies_the_proportions_and_keeps_the_promises(name):
+    V, F, J, B = shapes._BUILDERS[name](seed=1)
+    V0, _, J0, B0 = demo_figure(name)
+    np.testing.assert_array_equal(B, B0)  # the same skeleton ...
+    assert not np.array_equal(J, J0)  # ... in other proportions
+    _check_surface(V, F, J, B, genus=GENUS.get(name, 0))
+    assert len(F) <= 6500
+    np.testing.assert_array_equal(shapes._BUILDERS[name](seed=None)[0], V0)
 
 
 def test_returns_fresh_copies():
@@ -150,39 +188,13 @@ def test_returns_fresh_copies():
     assert np.ptp(V2[:, 1]) > 1
 
 
-@pytest.mark.parametrize("name", FIG3)
-def test_closed_manifold_surface(name):
-    V, F, J, B = demo_figure(name)
-    mesh = trimesh.Trimesh(V, F, process=False)
-    assert mesh.is_watertight
-    assert mesh.is_winding_consistent
-    assert mesh.is_volume
-    assert mesh.volume > 0  # outward orientation
-    assert mesh.euler_number == 2  # a single sphere-like surface
-    # every edge shared by exactly two faces (2-manifold)
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(E, axis=0, return_counts=True)
-    assert np.all(counts == 2)
-    # no degenerate faces
-    assert mesh.area_faces.min() > 1e-8
+def test_at_least_thirteen_3d_figures():
+    assert len(FIG3) >= 13
+    for name in FIG3:
+        assert demo_figure(name)[0].shape[1] == 3
 
 
-@pytest.mark.parametrize("name", FIG3)
-def test_no_self_intersections(name):
-    V, F, _, _ = demo_figure(name)
-    IF = igl.copyleft.cgal.remesh_self_intersections(V, F, detect_only=True)[2]
-    assert len(IF) == 0
-
-
-@pytest.mark.parametrize("name", FIG3)
-def test_joints_inside(name):
-    V, F, J, _ = demo_figure(name)
-    w = igl.winding_number(V, F, J)
-    # a sum of solid angles over a closed surface: exactly 1 inside up to rounding (4e-16 measured)
-    assert np.all(np.abs(w - 1.0) < 1e-12)
-    # strictly inside: some clearance to the surface
-    sqd = igl.point_mesh_squared_distance(J, V, F)[0]
-    assert np.sqrt(sqd).min() > 0.5
+# --- particular figures -------------------------------------------------------
 
 
 def test_face_budgets():
@@ -191,35 +203,66 @@ def test_face_budgets():
     assert len(demo_figure("woody2d")[1]) <= 4000
 
 
+def _roots(B):
+    tips = set(B[:, 1].tolist())
+    return set(int(r) for r in B[:, 0] if int(r) not in tips)
+
+
 def test_tpose_skeleton_and_overhang():
     V, F, J, B = demo_figure("tpose")
     assert 12 <= len(B) <= 15
-    # one tree: all parentless bones hang off the same (hips) root joint
-    roots = set(B[_roots_mask(B), 0].tolist())
+    roots = _roots(B)  # one tree hanging off the hips
     assert len(roots) == 1
-    np.testing.assert_array_equal(J[roots.pop()], [0.0, 30.0, 0.0])  # the hips
+    np.testing.assert_array_equal(J[roots.pop()], [0.0, 30.0, 0.0])
     # arms: the horizontal chains of bones at shoulder height
     d = J[B[:, 1]] - J[B[:, 0]]
     horizontal = np.abs(d[:, 1]) < 1e-9
     assert horizontal.sum() >= 4
     assert (J[B[horizontal, 1], 0] > 0).any() and (J[B[horizontal, 1], 0] < 0).any()
-    # legs reach down near the plate, head is the top
-    assert J[:, 1].min() < 5
-    assert J[:, 1].max() > 50
-    # feet flat on the plate: many vertices exactly at y = 0
-    assert np.sum(np.abs(V[:, 1]) < 1e-9) >= 10
+    assert J[:, 1].min() < 5 and J[:, 1].max() > 50
+    assert np.sum(np.abs(V[:, 1]) < 1e-9) >= 10  # feet flat on the plate
     # the arms' undersides create overhangs well above the ground
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    N /= np.linalg.norm(N, axis=1, keepdims=True)
     c = V[F].mean(axis=1)
-    risky = (N @ UP3 < -0.7) & (c[:, 1] > 35)
+    risky = (_normals(V, F) @ UP3 < -0.7) & (c[:, 1] > 35)
     assert risky.sum() >= 30
     assert np.abs(c[risky, 0]).max() > 15  # out along the arms
 
 
-def _roots_mask(B):
-    tips = set(B[:, 1].tolist())
-    return np.array([int(r) not in tips for r in B[:, 0]])
+def test_every_new_skeleton_is_one_tree():
+    for name in SEEDED:
+        assert len(_roots(demo_figure(name)[3])) == 1, name
+
+
+def test_apose_arms_slope_down_and_staff_is_horizontal():
+    _, _, J, B = demo_figure("apose")
+    d = J[B[:, 1]] - J[B[:, 0]]
+    slope = np.degrees(np.arctan2(-d[:, 1], np.linalg.norm(d[:, [0, 2]], axis=1)))
+    assert np.sum(np.abs(slope - 35.0) < 1.0) == 4  # upper arms and forearms
+    _, _, J, B = demo_figure("staff")
+    d = J[B[:, 1]] - J[B[:, 0]]
+    staff = (np.abs(d[:, 1]) < 1e-9) & (np.abs(d[:, 2]) < 1e-9) & (np.abs(d[:, 0]) > 20)
+    assert staff.sum() == 2 and len(set(B[staff, 0].tolist())) == 1  # two halves from one grip
+
+
+def test_arm_is_a_chain_of_four_bones_from_the_hand_on_the_plate_to_a_raised_shoulder():
+    _, _, J, B = demo_figure("arm")
+    assert len(B) == 4
+    assert all(B[i, 1] == B[i + 1, 0] for i in range(3))
+    assert J[B[0, 0], 1] > 20 and J[B[-1, 1], 1] < 2.5  # shoulder up, fingertips down
+
+
+def test_tentacle_makes_an_s_curve():
+    _, _, J, B = demo_figure("tentacle")
+    d = J[B[:, 1]] - J[B[:, 0]]
+    lean = np.sign(d[np.abs(d[:, 0]) > 1.0, 0])
+    assert (np.diff(lean) != 0).sum() >= 1  # leans one way, then the other
+    assert np.all(np.diff(J[:, 1])[:5] > 0)  # rising from the plate
+
+
+def test_seated_block_is_the_root_and_rests_on_the_plate():
+    V, F, J, B = demo_figure("seated")
+    assert _roots(B) == {int(B[0, 0])}
+    assert J[B[0, 0], 1] < 3.0 and J[B[0, 1], 1] > 12.0  # the block's bone runs up through it
 
 
 def test_branch_cantilever():
@@ -227,10 +270,11 @@ def test_branch_cantilever():
     assert 2 <= len(B) <= 3
     d = J[B[:, 1]] - J[B[:, 0]]
     assert np.any((np.abs(d[:, 1]) < 1e-9) & (np.abs(d[:, 0]) > 5))
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    N /= np.linalg.norm(N, axis=1, keepdims=True)
     c = V[F].mean(axis=1)
-    assert np.sum((N @ UP3 < -0.7) & (c[:, 1] > 10)) > 5
+    assert np.sum((_normals(V, F) @ UP3 < -0.7) & (c[:, 1] > 10)) > 5
+
+
+# --- woody2d ------------------------------------------------------------------
 
 
 def _signed_areas(V, F):
@@ -243,7 +287,7 @@ def _boundary_edges(F):
     E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     key = np.sort(E, axis=1)
     _, inv, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    return E[counts[inv] == 1], counts
+    return E[counts[inv.ravel()] == 1], counts
 
 
 def test_woody2d_mesh():
