@@ -95,8 +95,10 @@ def demo_figure(name):
             A humanoid sitting on a block (part of the mesh; its bone is the
             skeleton's root), feet on the plate, arms held out forward; 16 bones.
         ``"arm"``
-            An arm resting on the plate by its flat hand, the shoulder end
-            raised; a chain of 4 bones (upper arm, forearm, palm, fingers).
+            An arm propped on the plate by its flat hand, the forearm rising
+            from it and the upper arm reaching back over the hand to a raised
+            shoulder (the centre of mass stays over the hand); a chain of 4
+            bones (upper arm, forearm, palm, fingers).
         ``"tree"``
             A tree on a flared trunk with three levels of branches; 13 bones.
         ``"hand"``

@@ -12,16 +12,17 @@ __all__ = ["arm", "hand", "tentacle", "tree"]
 
 
 def arm(seed=None):
-    """An arm resting on the plate by its flat hand, the shoulder end raised.
+    """An arm propped on the plate by its flat hand, the shoulder end raised over it.
 
-    A chain of 4 bones: upper arm, forearm, palm and fingers; the hand (palm,
-    fingers and thumb) lies flat on the plate, the nearly horizontal upper arm
-    and the shoulder ball overhang it.
+    A chain of 4 bones: upper arm, forearm, palm and fingers. The hand (palm,
+    fingers and thumb) lies flat on the plate, the forearm rises from it, and
+    the upper arm reaches back over the hand, nearly horizontal, to a shoulder
+    ball: both overhang the plate, and the centre of mass stays over the hand.
 
     Parameters
     ----------
     seed : int, optional
-        Varies the lengths and the shoulder's height.
+        Varies the lengths and the upper arm's slope.
 
     Returns
     -------
@@ -30,14 +31,14 @@ def arm(seed=None):
     """
     body = Body(seed)
     p = body.vary
-    upper, fore = p(13.6), p(19.0)
-    wrist = body.joint("wrist", (24.0, 4.5, 0.0))
-    elbow = wrist + fore * np.array([-11.0, 15.5, 0.0]) / math.hypot(11.0, 15.5)
-    shoulder = elbow + upper * direction(180.0, p(17.0, 0.3))
-    body.joints = {"shoulder": shoulder, "elbow": elbow, **body.joints}
+    wrist = np.array([24.0, 4.5, 0.0])
+    elbow = wrist + p(15.0) * direction(180.0, 85.0)
+    shoulder = body.joint("shoulder", elbow + p(13.6) * direction(0.0, p(12.0, 0.3)))
+    body.joint("elbow", elbow)
+    body.joint("wrist", wrist)
     body.joint("knuckles", (31.0, 2.2, 0.0))
     body.joint("tips", (36.5, 1.5, 0.0))
-    body.add(ell(shoulder + (-1.0, 0.0, 0.0), (5.5, 5.0, 5.0), 0.0))
+    body.add(ell(shoulder + (1.0, 0.0, 0.0), (5.5, 5.0, 5.0), 0.0))
     body.chain(["shoulder", "elbow", "wrist"], (4.3, 3.3, 2.4), (2.0, 1.2))
     body.bone("wrist", "knuckles")
     body.bone("knuckles", "tips")
