@@ -8,7 +8,7 @@ and by PrusaSlicer, before and after, the reductions, E_arap, self-intersection
 and runtime.
 
     python benchmarks/paper_table.py [--out benchmarks/RESULTS.md] [--particles 200] [--iterations 120]
-        [--models bunny bb-bunny tpose branch] [--w-arap W] [--overhang-model prism|column] [--free all]
+        [--models bunny bb-bunny tpose branch] [--joint-limit DEG] [--w-arap W] [--overhang-model prism|column] [--free all]
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def run(name: str, args) -> dict:
         particles=args.particles, iterations=args.iterations, seed=args.seed, w_arap=args.w_arap,
         w_overhang=args.w_overhang, w_intersect=args.w_intersect, overhang_model=args.overhang_model,
         free=args.free, fix=args.fix, overhang_angle=args.overhang_angle, overhang_margin=args.overhang_margin,
-        max_angle=args.max_angle)
+        joint_limit=args.joint_limit)
     res = sl.optimize(rig, settings)
     runtime = time.perf_counter() - t0
     rep = build_report(rig, res)
@@ -90,7 +90,7 @@ def main(argv=None):
     p.add_argument("--particles", type=int, default=None)
     p.add_argument("--iterations", type=int, default=None)
     p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--max-angle", type=float, default=None)
+    p.add_argument("--joint-limit", type=float, default=None)
     p.add_argument("--w-arap", type=float, default=None)
     p.add_argument("--w-overhang", type=float, default=None)
     p.add_argument("--w-intersect", type=float, default=None)

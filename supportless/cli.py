@@ -109,8 +109,6 @@ def _search_options(f):
         click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
         click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
         click.option("--seed", default=d.seed, show_default=True, type=int),
-        click.option("--max-angle", default=d.max_angle, show_default=True, type=click.FloatRange(0, 180),
-                     help="Bound of every free Euler angle, degrees."),
         click.option("--overhang-angle", default=d.overhang_angle, show_default=True, type=click.FloatRange(0, 90),
                      help="Overhang threshold, degrees from the build plate."),
         click.option("--overhang-margin", default=d.overhang_margin, show_default=True,

@@ -268,9 +268,8 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     if base.shape != (rig.bone_count, 3):
         raise ValueError(f"start pose has {len(base)} bones, the rig {rig.bone_count}")
     mirror = require_mirror(rig) if settings.symmetric else None
-    layout = PoseLayout(rig, settings.fixed_bones(rig), base, mirror)
+    layout = PoseLayout(rig, settings.fixed_bones(rig), base, np.radians(settings.joint_limits(rig)), mirror)
     fixed, k, to_angles = layout.fixed, layout.count, layout.to_angles
-    limit = np.radians(settings.max_angle)
 
     def f(X, bound):
         return objective.bounded(to_angles(X), bound)
@@ -299,7 +298,7 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     if k == 0:
         swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
     else:
-        swarm = particle_swarm(f, -limit * np.ones(k), limit * np.ones(k), particles=settings.particles,
+        swarm = particle_swarm(f, layout.lower, layout.upper, particles=settings.particles,
                                iterations=settings.iterations, rng=np.random.default_rng(settings.seed),
                                initial=initial, callback=on_iteration, feasible=feasible,
                                pass_bound=True, **PSO_PRESETS[settings.preset])

@@ -52,8 +52,6 @@ class SearchSettings:
         Swarm size and number of iterations (the paper: 200 x 120).
     seed : int
         Same seed, same result.
-    max_angle : float
-        Bound of every free Euler angle, degrees (±).
     overhang_angle : float
         The printer's overhang threshold, degrees from the build plate: what
         reports count as needing support.
@@ -75,7 +73,8 @@ class SearchSettings:
     w_prior : float
         Weight of the natural-pose prior (:mod:`supportless.prior`).
     joint_limit : float
-        Largest rotation of a joint, degrees, as one (geodesic) angle.
+        Largest rotation of a joint, degrees, as one (geodesic) angle: the
+        search turns each free bone by a rotation vector inside this ball.
     limits : tuple of str
         Per-bone limits ``"BONE=DEGREES"`` (1-based bone numbers), e.g. ``("5=15",)``.
     keep_standing : bool
@@ -94,7 +93,6 @@ class SearchSettings:
     particles: int = 200
     iterations: int = 120
     seed: int = 0
-    max_angle: float = 30.0
     overhang_angle: float = 45.0
     overhang_margin: float = OVERHANG_MARGIN
     overhang_model: str = "prism"

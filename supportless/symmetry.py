@@ -9,7 +9,8 @@ A pose is symmetric when each pair turns as mirror images, ``R_q = S R_p S``
 with ``S = I - 2 n n^T`` the reflection, and each bone in the plane turns only
 about the plane's normal ``n`` (nodding, not tilting sideways) — the only
 rotations that equal their own mirror image. :class:`PoseLayout` maps the
-search's variables to the Euler angles of every bone, with or without symmetry.
+search's variables (rotation vectors inside each joint's limit) to the Euler
+angles of every bone, with or without symmetry.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
 
 from .errors import InputError
 from .kinematics import euler_to_matrix, matrix_to_euler
@@ -113,10 +115,13 @@ def find_mirror(rig: Rig, tolerance: float = MIRROR_TOLERANCE, steps: int = 180)
 class PoseLayout:
     """The search's variables and the pose they stand for.
 
-    Without a mirror every free bone has its three Euler angles (one, about
-    the plane normal, in 2D). With a mirror, each left/right pair has the three
-    angles of its first bone (the second mirrors it) and each bone in the plane
-    one angle about the plane's normal.
+    Each free bone's rotation is a rotation vector (axis times angle, radians)
+    kept inside the ball of its joint limit: a variable vector longer than the
+    limit stands for the rotation at the limit, so every point of the search
+    box is a pose within the limits. In 2D a bone has one angle, about the
+    plane normal. With a mirror, each left/right pair has the rotation vector
+    of its first bone (the second mirrors it) and each bone in the plane one
+    angle about the plane's normal.
 
     Parameters
     ----------
@@ -125,58 +130,84 @@ class PoseLayout:
         Bones that keep their angles in ``base``. With a mirror, a pair is
         fixed when either of its bones is.
     base : (m, 3) float64
-        Angles of the fixed bones (and of everything at ``X = 0`` without a mirror).
+        Euler angles of the fixed bones.
+    limits : (m,) float64
+        Largest rotation of each bone, radians.
     mirror : Mirror, optional
+
+    Attributes
+    ----------
+    count : int
+        Number of variables.
+    lower, upper : (count,) float64
+        The search box.
+    fixed : (m,) bool
     """
 
-    def __init__(self, rig: Rig, fixed: np.ndarray, base: np.ndarray, mirror: Mirror | None = None):
+    def __init__(self, rig: Rig, fixed: np.ndarray, base: np.ndarray, limits: np.ndarray,
+                 mirror: Mirror | None = None):
         self.base = np.asarray(base, np.float64)
         self.mirror = mirror
+        self.limits = np.broadcast_to(np.asarray(limits, np.float64), (rig.bone_count,))
+        self.dim = rig.dim
         fixed = np.asarray(fixed, bool).copy()
+        m = rig.bone_count
         if mirror is not None:
             fixed |= fixed[mirror.partner]
-            m = rig.bone_count
-            self.pairs = np.array([b for b in range(m) if not fixed[b] and mirror.partner[b] > b], np.int64)
-            self.images = mirror.partner[self.pairs]
-            self.central = np.array([b for b in range(m) if not fixed[b] and mirror.partner[b] == b], np.int64)
-            self.count = 3 * len(self.pairs) + len(self.central)
+            self.full = np.array([b for b in range(m) if not fixed[b] and mirror.partner[b] > b], np.int64)
+            self.images = mirror.partner[self.full]
+            self.turns = np.array([b for b in range(m) if not fixed[b] and mirror.partner[b] == b], np.int64)
+            self.axis = mirror.normal
         else:
-            self.free = np.zeros((rig.bone_count, 3), bool)
-            if rig.dim == 2:
-                self.free[~fixed, 2] = True
-            else:
-                self.free[~fixed] = True
-            self.count = int(self.free.sum())
+            free = np.flatnonzero(~fixed)
+            self.full = free if rig.dim == 3 else np.zeros(0, np.int64)
+            self.images = np.zeros(0, np.int64)
+            self.turns = free if rig.dim == 2 else np.zeros(0, np.int64)
+            self.axis = None
         self.fixed = fixed
+        self.count = 3 * len(self.full) + len(self.turns)
+        self.upper = np.concatenate([np.repeat(self.limits[self.full], 3), self.limits[self.turns]])
+        self.lower = -self.upper
 
     def to_angles(self, X: np.ndarray) -> np.ndarray:
         """Euler angles of every bone, (P, m, 3) float64, from variables ``X`` (P, count)."""
         X = np.asarray(X, np.float64)
-        A = np.repeat(self.base[None], len(X), axis=0)
-        if self.mirror is None:
-            A[:, self.free] = X
-            return A
-        k = 3 * len(self.pairs)
-        if len(self.pairs):
-            own = X[:, :k].reshape(len(X), -1, 3)
-            A[:, self.pairs] = own
-            S = self.mirror.reflection
-            A[:, self.images] = matrix_to_euler(S @ euler_to_matrix(own) @ S)
-        if len(self.central):
-            A[:, self.central] = matrix_to_euler(_axis_rotation(self.mirror.normal, X[:, k:]))
+        P = len(X)
+        A = np.repeat(self.base[None], P, axis=0)
+        k = 3 * len(self.full)
+        if len(self.full):
+            v = X[:, :k].reshape(P, -1, 3)
+            norm = np.linalg.norm(v, axis=2, keepdims=True)
+            lim = self.limits[self.full][None, :, None]
+            v = np.where(norm > lim, v * (lim / np.where(norm > 0, norm, 1.0)), v)
+            R = Rotation.from_rotvec(v.reshape(-1, 3)).as_matrix().reshape(P, -1, 3, 3)
+            A[:, self.full] = matrix_to_euler(R)
+            if self.mirror is not None:
+                S = self.mirror.reflection
+                A[:, self.images] = matrix_to_euler(S @ R @ S)
+        if len(self.turns):
+            theta = np.clip(X[:, k:], -self.limits[self.turns], self.limits[self.turns])
+            if self.axis is None:  # 2D: the angle about the plane normal
+                A[:, self.turns] = 0.0
+                A[:, self.turns, 2] = theta
+            else:
+                A[:, self.turns] = matrix_to_euler(_axis_rotation(self.axis, theta))
         return A
 
     def from_angles(self, angles: np.ndarray) -> np.ndarray:
         """Variables ``(count,)`` of a pose (its symmetric part, with a mirror)."""
         angles = np.asarray(angles, np.float64)
-        if self.mirror is None:
-            return angles[self.free]
-        R = euler_to_matrix(angles[self.central])
-        n = self.mirror.normal
-        # the angle about n of each central bone's rotation: from its antisymmetric part
-        theta = np.arctan2(np.einsum("bij,i,j->b", R, np.cross(n, _any_orthogonal(n)), _any_orthogonal(n)),
-                           np.einsum("bij,i,j->b", R, _any_orthogonal(n), _any_orthogonal(n)))
-        return np.concatenate([angles[self.pairs].ravel(), theta])
+        full = Rotation.from_matrix(euler_to_matrix(angles[self.full])).as_rotvec().ravel() \
+            if len(self.full) else np.zeros(0)
+        if self.axis is None:
+            turns = angles[self.turns, 2]
+        else:
+            R = euler_to_matrix(angles[self.turns])
+            u = _any_orthogonal(self.axis)
+            v = np.cross(self.axis, u)
+            # the angle about the axis of each rotation: R u = cos t u + sin t v
+            turns = np.arctan2(np.einsum("bij,i,j->b", R, v, u), np.einsum("bij,i,j->b", R, u, u))
+        return np.concatenate([full, turns])
 
 
 def _any_orthogonal(n: np.ndarray) -> np.ndarray:

@@ -56,7 +56,7 @@ def test_turning_the_bunnys_head_costs_more_than_an_ear(bunny_rig):
 
 
 def test_limits_hold_per_bone_in_the_search(branch_rig):
-    settings = sl.SearchSettings(particles=24, iterations=8, seed=1, max_angle=60.0, joint_limit=20.0,
+    settings = sl.SearchSettings(particles=24, iterations=8, seed=1, joint_limit=20.0,
                                  limits=("3=5",), free=("all",), keep_standing=False)
     result = sl.optimize(branch_rig, settings)
     turned = np.degrees(joint_angles(result.angles))

@@ -121,8 +121,8 @@ def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
     from supportless.energies.exact import intersecting_face_pairs
 
     rig = branch_rig
-    settings = SearchSettings(particles=24, iterations=10, seed=0, max_angle=170.0, w_intersect=0.0,
-                              w_arap=0.0, w_prior=0.0, joint_limit=180.0, keep_standing=False, free=("all",))
+    settings = SearchSettings(particles=24, iterations=10, seed=0, w_intersect=0.0,
+                              w_arap=0.0, w_prior=0.0, joint_limit=170.0, keep_standing=False, free=("all",))
     gated = sl.optimize(rig, settings)
     assert gated.stats["exact_calls"] > 0
     assert intersecting_face_pairs(rig.pose(gated.angles), rig.faces) == 0

@@ -26,8 +26,8 @@ def test_a_skeleton_without_a_mirror_image_has_none(bunny_rig):
 def test_layout_round_trip_and_symmetric_angles(tpose_rig):
     rig = tpose_rig
     mirror = find_mirror(rig)
-    layout = PoseLayout(rig, rig.anchored_bones, np.zeros((rig.bone_count, 3)), mirror)
-    X = np.random.default_rng(0).uniform(-0.5, 0.5, (4, layout.count))
+    layout = PoseLayout(rig, rig.anchored_bones, np.zeros((rig.bone_count, 3)), np.radians(60.0), mirror)
+    X = np.random.default_rng(0).uniform(-0.5, 0.5, (4, layout.count)) / np.sqrt(3)  # inside the 60 degree ball
     A = layout.to_angles(X)
     np.testing.assert_allclose(layout.from_angles(A[1]), X[1], atol=1e-12)
     R = euler_to_matrix(A)
@@ -45,3 +45,19 @@ def test_a_symmetric_search_finds_a_mirror_symmetric_pose(tpose_rig):
     image = J - 2.0 * ((J - mirror.point) @ mirror.normal)[:, None] * mirror.normal
     assert cKDTree(J).query(image)[0].max() < 1e-9 * np.ptp(rig.vertices)
     assert np.abs(result.angles).max() > 0
+
+
+def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
+    """Rotation vectors longer than a joint's limit stand for the rotation at the limit."""
+    from supportless.prior import joint_angles
+
+    rig = tpose_rig
+    limits = np.radians(np.linspace(10.0, 50.0, rig.bone_count))
+    for mirror in (None, find_mirror(rig)):
+        layout = PoseLayout(rig, rig.anchored_bones, np.zeros((rig.bone_count, 3)), limits, mirror)
+        X = np.random.default_rng(1).uniform(layout.lower, layout.upper, (200, layout.count))
+        turned = joint_angles(layout.to_angles(X))
+        assert np.all(turned <= limits + 1e-9)
+        assert np.any(turned > 0.99 * limits)  # the limit is reached, not just approached
+        inside = X * 0.3  # well inside every ball: the variables come back
+        np.testing.assert_allclose(layout.from_angles(layout.to_angles(inside[:1])[0]), inside[0], atol=1e-9)

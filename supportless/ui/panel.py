@@ -21,7 +21,7 @@ NUMBER_SETTINGS = (
     ("particles", "Particles", {"min": 2, "max": 5000, "step": 1}),
     ("iterations", "Iterations", {"min": 1, "max": 10000, "step": 1}),
     ("seed", "Seed", {"min": 0, "step": 1}),
-    ("max_angle", "Max angle °", {"min": 1.0, "max": 180.0, "step": 1.0}),
+    ("joint_limit", "Joint limit °", {"min": 1.0, "max": 180.0, "step": 1.0}),
     ("w_arap", "w ARAP", {"min": 0.0, "step": 0.1}),
     ("w_overhang", "w overhang", {"min": 0.0, "step": 0.1}),
     ("w_intersect", "w intersect", {"min": 0.0, "step": 1.0}),
