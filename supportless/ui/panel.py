@@ -246,7 +246,8 @@ class Panel:
         fixed_list = ", ".join(str(b + 1) for b in np.flatnonzero(fixed)) or "none"
         notes = "".join(f"\n\n⚠ {message}" for message in self.invalid.values())
         self.fixed_info.content = (f"Fixed in the search (grey): bones {fixed_list}. Default: the bones on the "
-                                   f"plate and their parents. The search counts faces past "
+                                   "plate and the bones joining them; the rest of the body turns about "
+                                   f"them. The search counts faces past "
                                    f"{settings.search_overhang_angle:g}° (threshold + margin) as needing "
                                    f"support.{notes}")
 

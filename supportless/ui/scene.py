@@ -149,7 +149,7 @@ class Scene:
         self.faces = np.asarray(rig.faces, np.int64)
         self.edges = np.asarray(boundary_edges(self.faces), np.int64) if rig.dim == 2 else None
         rest = to3(rig.vertices)
-        self.roots = to3(rig.joints[rig.bones[:, 0]])
+        self.roots = to3(rig.joints[rig.pivots])  # the joint each bone turns about
         self.size = float(np.linalg.norm(np.ptp(rest, axis=0)))
         centre = rest.mean(axis=0)
         self._centre_plate = centre - (centre @ self.up) * self.up
