@@ -203,6 +203,10 @@ def _summary_table(report: dict):
 
     table.add_row("intersecting face pairs (exact)", pairs(b.get("intersecting_face_pairs")),
                   pairs(a.get("intersecting_face_pairs")), "")
+    table.add_row("new contacts with the plate", str(b["new_contact_vertices"]), str(a["new_contact_vertices"]), "")
+    table.add_row("stability margin (of the height)", f"{100 * b['stability_margin']:.1f} %",
+                  f"{100 * a['stability_margin']:.1f} %", "stands" if a["stands"] else "FALLS OVER")
+    table.add_row("largest joint rotation", "0°", f"{report['largest_rotation_deg']:.0f}°", "")
     return table
 
 
