@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["Body", "Proportions", "cap", "ell", "box", "mesh_from_sdf", "compact"]
+__all__ = ["Body", "Proportions", "box", "cap", "compact", "direction", "ell", "mesh_from_sdf", "unit"]
 
 #: A part is skipped where a lower bound on its distance exceeds the running
 #: union's value plus its blend radius by this much: the smooth minimum would
@@ -30,10 +30,11 @@ _GRID_SHIFTS = (0.0, 0.31, 0.57, 0.83)
 # scalar signed-distance primitives (negative inside), compiled with numba
 # ---------------------------------------------------------------------------
 
-#: Columns of a row of the parts table: kind, blend radius, bounding-sphere
-#: centre (3), squared slope and radius of the bound, then the parameters.
+#: Kinds of parts, the first column of the parts table.
 _CAP, _ELL, _BOX = 0.0, 1.0, 2.0
 _KINDS = {"cap": _CAP, "ell": _ELL, "box": _BOX}
+#: Columns of a row of the parts table: kind, blend radius, bounding-sphere
+#: centre (3), squared slope and radius of the bound, then up to 8 parameters.
 _COLUMNS = 15
 
 
