@@ -44,7 +44,7 @@ __all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "W_ARAP", "W_INTERSECT"
 W_ARAP = 2.0
 W_OVERHANG = 1.0
 W_INTERSECT = 50.0
-W_PRIOR = 1.0
+W_PRIOR = 0.3
 
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
 #: larger than any pose that keeps them can cost.

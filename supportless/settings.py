@@ -31,6 +31,12 @@ __all__ = ["OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_b
 #: (benchmarks/RESULTS.md).
 OVERHANG_MARGIN = 10.0
 
+#: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
+#: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
+#: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
+#: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
+JOINT_LIMIT = 45.0
+
 #: The steepest threshold the search uses, degrees (90 would count vertical walls).
 MAX_SEARCH_ANGLE = 89.0
 
@@ -104,7 +110,7 @@ class SearchSettings:
     preset: str = "standard"
     exact_intersections: bool = True
     w_prior: float = W_PRIOR
-    joint_limit: float = 30.0
+    joint_limit: float = JOINT_LIMIT
     limits: tuple = ()
     keep_standing: bool = True
     symmetric: bool = False

@@ -12,7 +12,7 @@ from supportless.settings import SearchSettings, angle_layout, resolve_fixed_bon
 
 def test_defaults_and_frozen():
     s = SearchSettings()
-    assert (s.particles, s.iterations, s.seed, s.joint_limit) == (200, 120, 0, 30.0)
+    assert (s.particles, s.iterations, s.seed, s.joint_limit) == (200, 120, 0, 45.0)
     assert (s.w_arap, s.w_overhang, s.w_intersect) == (W_ARAP, W_OVERHANG, W_INTERSECT)
     with pytest.raises(dataclasses.FrozenInstanceError):
         s.particles = 3
