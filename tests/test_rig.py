@@ -357,3 +357,16 @@ def test_default_search_moves_a_chain_resting_on_its_end():
     result = sl.optimize(rig, particles=16, iterations=6, seed=0)
     assert np.abs(result.angles[~fixed]).max() > 0  # the free bones moved
     assert result.value < float(result.objective(rig.rest_angles()))
+
+
+def test_a_bone_that_leaves_the_solid_keeps_only_its_samples_inside():
+    """A bone from the arm's tip to inside the head crosses open air: its samples outside are dropped."""
+    import igl
+
+    V, F, J, B = sl.demo_figure("branch")
+    J = np.vstack([J, [[1.0, 26.0, 0.0]]])
+    B = np.vstack([B, [[2, 4]]])
+    rig = sl.prepare_rig(V, F, J, B, up="y")
+    inner = rig.tet_vertices[len(rig.vertices):]
+    assert np.all(igl.winding_number(rig.vertices, rig.faces, inner) > 0.5)  # no tet vertex outside
+    assert rig.weights[:, 3].max() > 0.99  # the bone still drives the skin near its inside ends
