@@ -354,8 +354,8 @@ def test_default_search_moves_a_chain_resting_on_its_end():
     rig = sl.prepare_rig(*_tipped_branch(), up="y")
     fixed = sl.SearchSettings().fixed_bones(rig)
     np.testing.assert_array_equal(fixed, [False, True, False])
-    result = sl.optimize(rig, particles=16, iterations=6, seed=0)
-    assert np.abs(result.angles[~fixed]).max() > 0  # the free bones moved
+    result = sl.optimize(rig, particles=40, iterations=20, seed=0)
+    assert np.abs(result.angles[~fixed]).max() > 0.1  # the free bones moved
     assert result.value < float(result.objective(rig.rest_angles()))
 
 
