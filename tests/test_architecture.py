@@ -91,7 +91,7 @@ LAYERS = [
     {"supportless.errors", "supportless.geometry"},
     {"supportless.io", "supportless.kinematics", "supportless.tetmesh", "supportless.shapes"},
     {"supportless.rig", "supportless.energies"},
-    {"supportless.standing", "supportless.prior", "supportless.symmetry"},
+    {"supportless.standing", "supportless.prior", "supportless.symmetry", "supportless.orientation"},
     {"supportless.objective"},
     {"supportless.settings"},
     {"supportless.search"},
