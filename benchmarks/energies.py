@@ -14,16 +14,15 @@ import argparse
 import os
 import platform
 import time
-from pathlib import Path
 
 import numba
 import numpy as np
 
 import supportless as sl
+from models import DATA
 from supportless.energies.arap import arap_energy
 from supportless.kinematics import skin
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
 
 def best_of(fn, repeat):

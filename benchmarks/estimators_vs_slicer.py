@@ -21,22 +21,16 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 
 import numpy as np
 
 import supportless as sl
 from supportless.energies.overhang import projected_risky_area
+from models import available, load
 from supportless.energies.exact import intersecting_face_pairs
 from supportless.slicer import find_prusa_slicer, slice_check
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
-
-def load(name):
-    if name in sl.DEMO_FIGURES:
-        return sl.load_rig(f"demo:{name}")
-    return sl.load_rig(DATA / f"{name}.obj", DATA / f"{name}.tgf", up="y")
 
 
 def samples(name, poses, max_angle, rng):
@@ -81,7 +75,7 @@ def main(argv=None):
     rng = np.random.default_rng(args.seed)
     rows = []
     for m in args.models:
-        if m in sl.DEMO_FIGURES or (DATA / f"{m}.obj").is_file():
+        if available(m):
             rows += samples(m, args.poses, args.max_angle, rng)
     y = np.array([r["slicer_mm"] for r in rows])
     print(f"{len(rows)} poses of {', '.join(args.models)}; PrusaSlicer support filament vs estimates (60 mm tall)")

@@ -22,18 +22,12 @@ from pathlib import Path
 import numpy as np
 
 import supportless as sl
+from models import SHARED, available, load
 from supportless.orientation import candidate_ups, rank_ups, rotation_between
 from supportless.report import reduction
 from supportless.slicer import slice_check
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-SHARED = ("bunny", "bb-bunny")
 
-
-def load(name):
-    if name in sl.DEMO_FIGURES:
-        return sl.load_rig(f"demo:{name}")
-    return sl.load_rig(DATA / f"{name}.obj", DATA / f"{name}.tgf", up="y")
 
 
 def turn(rig, slice_best: int) -> dict:
@@ -56,8 +50,7 @@ def main(argv=None):
     p.add_argument("--slice-best", type=int, default=4, help="Candidates sliced per model (best estimates first).")
     p.add_argument("--out", default=None, help="Also write the table to this file.")
     args = p.parse_args(argv)
-    models = args.models or [m for m in sl.DEMO_FIGURES if m != "woody2d"] + [
-        m for m in SHARED if (DATA / f"{m}.obj").is_file()]
+    models = args.models or [m for m in sl.DEMO_FIGURES if m != "woody2d"] + [m for m in SHARED if available(m)]
     lines = ["| model | candidates | upright support mm | best turned support mm | printing direction (input frame) "
              "| reduction by turning |", "|---|---|---|---|---|---|"]
     for name in models:

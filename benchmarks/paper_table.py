@@ -23,17 +23,12 @@ import time
 from pathlib import Path
 
 import supportless as sl
+from models import available, load
 from supportless.report import build_report, write_pictures
 from supportless.slicer import find_prusa_slicer, slice_check
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
 
-
-def load(name: str):
-    if name in sl.DEMO_FIGURES:
-        return sl.load_rig(f"demo:{name}")
-    return sl.load_rig(DATA / f"{name}.obj", DATA / f"{name}.tgf", up="y")
 
 
 def run(name: str, args) -> dict:
@@ -102,7 +97,7 @@ def main(argv=None):
     p.add_argument("--out", default=None, help="Write the Markdown table here (default: print only).")
     p.add_argument("--keep", default=None, help="Folder for posed meshes, reports and pictures.")
     args = p.parse_args(argv)
-    models = [m for m in args.models if m in sl.DEMO_FIGURES or (DATA / f"{m}.obj").is_file()]
+    models = [m for m in args.models if available(m)]
     skipped = sorted(set(args.models) - set(models))
     rows = []
     for m in models:

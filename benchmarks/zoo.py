@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
+import models
 import supportless as sl
+from models import DATA, SHARED, available
 from supportless.kinematics import euler_to_matrix
 from supportless.report import build_report, write_pictures
 from supportless.slicer import SlicerError, slice_check
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT.parent / "shared" / "data"
-SHARED = ("bunny", "bb-bunny")
 HEADING = "## Zoo"
 
 
@@ -45,13 +45,9 @@ def zoo_figures() -> list[str]:
 
 def load(name: str):
     """The rig of a built-in figure or of a shared model (up ``y``); None with the reason when it is missing."""
-    if name in sl.DEMO_FIGURES:
-        return sl.load_rig(f"demo:{name}"), None
-    mesh, skeleton = DATA / f"{name}.obj", DATA / f"{name}.tgf"
-    missing = [str(p) for p in (mesh, skeleton) if not p.is_file()]
-    if missing:
-        return None, f"missing {', '.join(missing)}"
-    return sl.load_rig(mesh, skeleton, up="y"), None
+    if not available(name):
+        return None, f"missing {DATA / name}.obj or .tgf"
+    return models.load(name), None
 
 
 def largest_rotation_deg(report: dict, angles: np.ndarray) -> float:
