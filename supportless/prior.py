@@ -19,7 +19,6 @@ from functools import cached_property
 
 import numpy as np
 
-from .energies.balance import centre_of_mass_operator
 from .kinematics import euler_to_matrix, topological_order
 from .rig import Rig
 
@@ -68,8 +67,7 @@ class PosePrior:
     @cached_property
     def carried(self) -> np.ndarray:
         """(m,) float64: share of the body's volume each bone moves (itself and its subtree), in [0, 1]."""
-        own = centre_of_mass_operator(self.rig.tet_vertices, self.rig.tets, self.rig.tet_weights)[:, -1]
-        carried = own.copy()
+        carried = self.rig.mass_moments[:, -1].copy()
         parents = self.rig.parents
         for b in topological_order(parents)[::-1]:  # children before parents
             if parents[b] >= 0:

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from . import kinematics as kin
+from .energies.balance import centre_of_mass_operator
 from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
@@ -100,6 +101,13 @@ class Rig:
         return self.tet_weights[: len(self.vertices)]
 
     # ------------------------------------------------- contact and kinematic tree
+    @cached_property
+    def mass_moments(self) -> np.ndarray:
+        """(m, d+1) float64: per-bone moments of the solid's volume (see
+        :func:`~supportless.energies.balance.centre_of_mass_operator`); the last
+        column is the share of the volume each bone's weights carry."""
+        return centre_of_mass_operator(self.tet_vertices, self.tets, self.tet_weights)
+
     @cached_property
     def contact_vertices(self) -> np.ndarray:
         """(n,) bool: surface vertices resting on the build plate in the rest pose.

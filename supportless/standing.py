@@ -24,8 +24,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .energies.balance import (centre_of_mass, centre_of_mass_operator, new_contact_depth, stability_margin,
-                               support_polygon)
+from .energies.balance import centre_of_mass, new_contact_depth, stability_margin, support_polygon
 from .energies.surface import plane_basis
 from .rig import CONTACT_TOLERANCE, Rig
 
@@ -70,11 +69,6 @@ class Standing:
         self.polygon = support_polygon(rig.vertices[rig.contact_vertices], rig.up)
 
     @cached_property
-    def com_operator(self) -> np.ndarray:
-        """(m, d+1) float64: see :func:`~supportless.energies.balance.centre_of_mass_operator`."""
-        return centre_of_mass_operator(self.rig.tet_vertices, self.rig.tets, self.rig.tet_weights)
-
-    @cached_property
     def rest_margin(self) -> float:
         """Stability margin of the rest pose, in model units (negative: it does not stand)."""
         return float(self.margin(self.rig.transforms(self.rig.rest_angles())))
@@ -92,7 +86,7 @@ class Standing:
 
     def centre_of_mass(self, transforms: np.ndarray) -> np.ndarray:
         """Centres of mass of posed solids, (P, d) or (d,) float64, from bone transforms (P, m, d, d+1)."""
-        return centre_of_mass(transforms, self.com_operator)
+        return centre_of_mass(transforms, self.rig.mass_moments)
 
     def margin(self, transforms: np.ndarray) -> np.ndarray:
         """Stability margins (model units) of posed solids, (P,) float64 or float."""

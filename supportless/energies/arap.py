@@ -188,7 +188,6 @@ def arap_precompute(vertices, elements, weights, clusters=100, rng=None) -> Arap
     if W.shape[0] != n:
         raise ValueError("weights must have one row per vertex")
     m = W.shape[1]
-    k = E.shape[0]
     if rng is None:
         rng = 0
     rng = np.random.default_rng(rng)
