@@ -83,7 +83,7 @@ def run(name: str, settings, pictures: Path) -> dict:
     row = {"model": name, "bones": rig.bone_count, "seconds": seconds, "report": report,
            "rotation": largest_rotation_deg(report, result.angles)}
     try:
-        row["slicer"] = slice_check((rig.vertices, rig.faces), (result.vertices, rig.faces), up=rig.up,
+        row["slicer"] = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
                                     height_mm=60.0).to_dict()
     except SlicerError as exc:  # SlicerNotFound included
         row["slicer_error"] = str(exc).splitlines()[0]

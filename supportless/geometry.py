@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["parse_up", "place_on_plate", "signed_volume"]
+__all__ = ["parse_up", "place_on_plate", "print_pose", "signed_volume"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -96,3 +96,29 @@ def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
     placed : (n, d) float64
     """
     return vertices - (vertices @ up).min() * up
+
+
+def print_pose(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """A surface turned into its print orientation and placed on the plate.
+
+    The surface is turned by ``rotation`` about its bounding-box centre (so it
+    stays where it was across the plate) and moved along ``up`` so its lowest
+    point is at 0.
+
+    Parameters
+    ----------
+    vertices : (n, d) float64
+        The surface in the display frame (as the model stands).
+    rotation : (d, d) float64
+        The print rotation R: ``R @ u == up`` for the display-frame direction
+        ``u`` that prints upwards.
+    up : (d,) float64
+        Unit printing direction (of the input's frame convention).
+
+    Returns
+    -------
+    printed : (n, d) float64
+    """
+    V = np.asarray(vertices, np.float64)
+    centre = 0.5 * (V.min(axis=0) + V.max(axis=0))
+    return place_on_plate((V - centre) @ np.asarray(rotation, np.float64).T + centre, up)

@@ -145,8 +145,15 @@ class Objective:
         return max(self.rest_overhang, 1e-3 * self.volume)
 
     # --------------------------------------------------------------- energies
-    def overhang(self, vertices: np.ndarray) -> np.ndarray:
-        """Raw overhang estimate of posed vertices, (P,) or float."""
+    def overhang(self, vertices: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
+        """Raw overhang estimate of posed vertices, (P,) or float.
+
+        ``rotations`` ((P, d, d) or (d, d) float64, optional) are the print
+        rotations: support is counted on ``vertices @ R.T`` (the print frame,
+        :mod:`supportless.orientation`); none = printed as the model stands.
+        """
+        if rotations is not None:
+            vertices = np.einsum("...ij,...nj->...ni", rotations, vertices)
         if self.overhang_model == "column":
             return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
                                   backend=self.backend)
@@ -160,12 +167,15 @@ class Objective:
     def _intersection(self, vertices: np.ndarray) -> np.ndarray:
         return self_intersection_volume(vertices, self.rig.faces, self.rig.up, self.resolution, backend=self.backend)
 
-    def raw_terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
+    def raw_terms(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The three energies before normalisation.
 
         Parameters
         ----------
         angles : (P, m, 3) or (m, 3) float64
+        rotations : (P, d, d) or (d, d) float64, optional
+            Print rotations: the overhang is counted in the print frame
+            (everything else is judged as the model stands).
 
         Returns
         -------
@@ -175,15 +185,15 @@ class Objective:
             keeps the hard rules).
         """
         transforms, V = self._posed(angles)
-        return self._cheap_terms(angles, transforms, V) | {"intersection": self._intersection(V)}
+        return self._cheap_terms(angles, transforms, V, rotations) | {"intersection": self._intersection(V)}
 
-    def _cheap_terms(self, angles, transforms, V) -> dict:
+    def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
         violation = self.prior.excess(angles)
         if self.keep_standing:
             violation = violation + self.standing.violation(transforms, V)
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
-                "overhang": self.overhang(V), "prior": self.prior.cost(angles), "violation": violation}
+                "overhang": self.overhang(V, rotations), "prior": self.prior.cost(angles), "violation": violation}
 
     def normalise(self, raw: dict) -> dict:
         """Raw terms -> normalised terms (see the module docstring)."""
@@ -202,27 +212,29 @@ class Objective:
         violation = terms["violation"]
         return value + np.where(violation > 0, INFEASIBLE + violation, 0.0)
 
-    def terms(self, angles: np.ndarray) -> dict[str, np.ndarray]:
+    def terms(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """Normalised terms of a batch of poses.
 
         Parameters
         ----------
         angles : (P, m, 3) or (m, 3) float64
+        rotations : (P, d, d) or (d, d) float64, optional
+            Print rotations (see :meth:`raw_terms`).
 
         Returns
         -------
         terms : dict with keys ``arap``, ``overhang``, ``intersection``, ``prior``, ``violation``
             (P,) float64 arrays (0-d arrays for a single pose).
         """
-        return self.normalise(self.raw_terms(angles))
+        return self.normalise(self.raw_terms(angles, rotations))
 
-    def evaluate(self, angles: np.ndarray) -> tuple[np.ndarray, dict, dict]:
+    def evaluate(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> tuple[np.ndarray, dict, dict]:
         """Objective, normalised terms and raw terms in one pass."""
-        raw = self.raw_terms(angles)
+        raw = self.raw_terms(angles, rotations)
         terms = self.normalise(raw)
         return self.combine(terms), terms, raw
 
-    def bounded(self, angles: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    def bounded(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
         """Objective of a batch, exact only where it can beat ``bound``.
 
         The self-intersection term is never negative, so a pose whose
@@ -234,6 +246,8 @@ class Objective:
         ----------
         angles : (P, m, 3) float64
         bound : (P,) float64
+        rotations : (P, d, d) float64, optional
+            Print rotations (see :meth:`raw_terms`).
 
         Returns
         -------
@@ -242,16 +256,16 @@ class Objective:
             of it that is at least ``bound``.
         """
         transforms, V = self._posed(angles)
-        partial = self._cheap_terms(angles, transforms, V) | {"intersection": 0.0}
+        partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}
         values = np.array(self.combine(self.normalise(partial)), np.float64)
         todo = np.flatnonzero(values < np.asarray(bound))
         if len(todo) and self.w_intersect != 0:
             values[todo] += self.w_intersect * np.asarray(self._intersection(V[todo])) / self.volume
         return values
 
-    def __call__(self, angles: np.ndarray) -> np.ndarray:
+    def __call__(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
         """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""
-        return self.combine(self.terms(angles))
+        return self.combine(self.terms(angles, rotations))
 
     def settings(self) -> dict:
         """The weights and options, for reports."""

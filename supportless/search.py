@@ -4,7 +4,9 @@
 standard velocity update (inertia, cognitive and social terms, positions
 clamped to the bounds) as in libigl's ``igl::pso``, except that the whole swarm
 is evaluated in one batched call per iteration. :func:`optimize` searches the
-Euler angles of a rig's free bones with it and returns a :class:`PoseResult`.
+Euler angles of a rig's free bones with it (and, with ``orient="free"``, the
+print rotation: two more variables in 3D, one in 2D) and returns a
+:class:`PoseResult`.
 """
 
 from __future__ import annotations
@@ -16,8 +18,9 @@ from typing import Callable
 import numpy as np
 
 from .energies.exact import intersecting_face_pairs
-from .geometry import place_on_plate
+from .geometry import place_on_plate, print_pose
 from .objective import Objective
+from .orientation import rotations_from_params, seed_params
 from .rig import Rig
 from .settings import PSO_PRESETS, SearchSettings
 from .symmetry import PoseLayout, require_mirror
@@ -170,8 +173,8 @@ class PoseResult:
     angles : (m, 3) float64
         Best pose, radians.
     vertices : (n, d) float64
-        Posed full-resolution surface, placed on the build plate (lowest point
-        at 0 along up).
+        Posed full-resolution surface standing as the input stood (the
+        display frame), placed on the build plate (lowest point at 0 along up).
     value : float
         Objective of the best pose.
     history : (iterations + 1,) float64
@@ -194,6 +197,12 @@ class PoseResult:
         Where the time went: ``exact_calls``/``exact_seconds`` (CGAL checks
         of candidates for the swarm's best) and ``progress_calls``/
         ``progress_seconds`` (terms of the best pose per iteration).
+    rotation : (d, d) float64
+        The print rotation R (the identity with ``orient="keep"``).
+    print_vertices : (n, d) float64
+        The posed surface in the print frame: ``vertices`` turned by R
+        (:func:`supportless.geometry.print_pose`), on the plate. This is
+        the mesh to slice.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.build_report`): it measures the rest pose and
@@ -212,6 +221,14 @@ class PoseResult:
     term_history: dict = field(default_factory=dict)
     runtime_seconds: float = 0.0
     stats: dict = field(default_factory=dict)
+    rotation: np.ndarray | None = None
+    print_vertices: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.rotation is None:
+            self.rotation = np.eye(self.vertices.shape[1])
+        if self.print_vertices is None:
+            self.print_vertices = self.vertices
 
 
 class _Timed:
@@ -250,8 +267,8 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         than the start pose.
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
-        (normalised terms of the best pose), ``angles`` and ``iterations``;
-        return ``False`` to stop.
+        (normalised terms of the best pose), ``angles``, ``rotation`` (the
+        print rotation) and ``iterations``; return ``False`` to stop.
     **changes
         Settings to change from ``settings`` (``particles=50``, ``seed=1``, ...).
 
@@ -269,14 +286,22 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         raise ValueError(f"start pose has {len(base)} bones, the rig {rig.bone_count}")
     mirror = require_mirror(rig) if settings.symmetric else None
     layout = PoseLayout(rig, settings.fixed_bones(rig), base, np.radians(settings.joint_limits(rig)), mirror)
-    fixed, k, to_angles = layout.fixed, layout.count, layout.to_angles
+    fixed, k = layout.fixed, layout.count
+    turns = settings.orient == "free"
+    o = rig.dim - 1 if turns else 0       # orientation variables after the k pose variables
+
+    def to_angles(X):
+        return layout.to_angles(X[:, :k])
+
+    def to_rotations(X):
+        return rotations_from_params(X[:, k:], rig.up) if turns else None
 
     def f(X, bound):
-        return objective.bounded(to_angles(X), bound)
+        return objective.bounded(to_angles(X), bound, to_rotations(X))
 
     stats: dict = {}
     term_history = {"arap": [], "overhang": [], "intersection": []}
-    best_terms = _Timed(lambda x: objective.terms(to_angles(x[None])), stats, "progress")
+    best_terms = _Timed(lambda x: objective.terms(to_angles(x[None]), to_rotations(x[None])), stats, "progress")
 
     def on_iteration(it, x, value):
         terms = {key: float(v[0]) for key, v in best_terms(x).items()}
@@ -284,8 +309,11 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
             term_history[key].append(terms[key])
         if callback is not None:
             return callback(it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
-                                 "iterations": settings.iterations})
+                                 "rotation": _rotation(x), "iterations": settings.iterations})
         return None
+
+    def _rotation(x):
+        return np.eye(rig.dim) if not turns else to_rotations(x[None])[0]
 
     feasible = None
     if settings.exact_intersections and rig.dim == 3:
@@ -295,17 +323,25 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         feasible = _Timed(no_intersection, stats, "exact")
 
     initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), layout.from_angles(base)])
-    if k == 0:
+    if turns:  # upright first, then the rest pose at the best candidate directions
+        seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle)
+        initial = np.vstack([np.hstack([initial, np.zeros((len(initial), o))]),
+                             np.hstack([np.zeros((len(seeds), k)), seeds])])
+    if k + o == 0:
         swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
     else:
-        swarm = particle_swarm(f, layout.lower, layout.upper, particles=settings.particles,
+        lower = np.concatenate([layout.lower, np.full(o, -np.pi)])
+        upper = np.concatenate([layout.upper, np.full(o, np.pi)])
+        swarm = particle_swarm(f, lower, upper, particles=settings.particles,
                                iterations=settings.iterations, rng=np.random.default_rng(settings.seed),
                                initial=initial, callback=on_iteration, feasible=feasible,
                                pass_bound=True, **PSO_PRESETS[settings.preset])
     angles = to_angles(swarm.x[None])[0]
+    rotation = _rotation(swarm.x)
     posed = place_on_plate(rig.pose(angles), rig.up)
-    terms = {key: float(v) for key, v in objective.terms(angles).items()}
+    terms = {key: float(v) for key, v in objective.terms(angles, rotation if turns else None).items()}
     return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=swarm.history,
                       terms=terms, settings=settings, objective=objective, interrupted=swarm.interrupted,
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
-                      stats=stats)
+                      stats=stats, rotation=rotation,
+                      print_vertices=print_pose(posed, rotation, rig.up) if turns else posed)

@@ -20,7 +20,7 @@ import numpy as np
 from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective
 from .rig import Rig
 
-__all__ = ["OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_bones"]
+__all__ = ["ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_bones"]
 
 #: Degrees added to the overhang threshold during the search. A search that
 #: counts faces as risky only up to the printer's threshold parks them just
@@ -36,6 +36,14 @@ OVERHANG_MARGIN = 10.0
 #: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
 #: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
 JOINT_LIMIT = 45.0
+
+#: Print-orientation modes (:attr:`SearchSettings.orient`).
+ORIENT_MODES = ("free", "keep")
+
+#: Candidate printing directions the swarm starts particles at (the best by the
+#: prism estimate at the rest pose). See benchmarks/RESULTS.md, "Pose and
+#: orientation".
+ORIENT_SEEDS = 4
 
 #: The steepest threshold the search uses, degrees (90 would count vertical walls).
 MAX_SEARCH_ANGLE = 89.0
@@ -81,6 +89,7 @@ class SearchSettings:
     joint_limit : float
         Largest rotation of a joint, degrees, as one (geodesic) angle: the
         search turns each free bone by a rotation vector inside this ball.
+        0 fixes every bone (with ``orient="free"``: turning only).
     limits : tuple of str
         Per-bone limits ``"BONE=DEGREES"`` (1-based bone numbers), e.g. ``("5=15",)``.
     keep_standing : bool
@@ -88,6 +97,13 @@ class SearchSettings:
         (:mod:`supportless.standing`).
     symmetric : bool
         Keep left/right pairs of bones mirror images (:mod:`supportless.symmetry`).
+    orient : {"free", "keep"}
+        ``free``: search the print orientation with the pose (support is
+        counted with the posed model turned by a rotation R,
+        :mod:`supportless.orientation`); ``keep``: print as the model stands.
+    orient_seeds : int
+        With ``orient="free"``, particles started (at the rest pose) at this
+        many of the best-ranked candidate printing directions.
     clusters : int or None
         Rotation clusters of the reduced ARAP energy.
     resolution : int
@@ -114,6 +130,8 @@ class SearchSettings:
     limits: tuple = ()
     keep_standing: bool = True
     symmetric: bool = False
+    orient: str = "free"
+    orient_seeds: int = ORIENT_SEEDS
     clusters: int | None = 100
     resolution: int = 192
     backend: str = "fast"
@@ -132,7 +150,11 @@ class SearchSettings:
             raise ValueError(f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
         if self.particles < 1 or self.iterations < 0:
             raise ValueError("particles must be at least 1 and iterations at least 0")
-        if not 0.0 < self.joint_limit <= 180.0:
+        if self.orient not in ORIENT_MODES:
+            raise ValueError(f"orient must be one of {ORIENT_MODES}, not {self.orient!r}")
+        if self.orient_seeds < 0:
+            raise ValueError(f"orient_seeds must be at least 0, not {self.orient_seeds}")
+        if not 0.0 <= self.joint_limit <= 180.0:
             raise ValueError(f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
@@ -189,8 +211,8 @@ class SearchSettings:
         return out
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
-        """Which bones keep their rotation, (m,) bool (see :func:`resolve_fixed_bones`)."""
-        return resolve_fixed_bones(rig, self.fix, self.free)
+        """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
+        return resolve_fixed_bones(rig, self.fix, self.free) | (self.joint_limits(rig) == 0.0)
 
     def to_dict(self) -> dict:
         """The settings as JSON-ready values, plus the derived ``search_overhang_angle``."""
