@@ -125,8 +125,12 @@ def _search_options(f):
                      show_default=True, help="Support estimate the search minimises."),
         click.option("--w-prior", type=float, default=d.w_prior, show_default=True,
                      help="Weight of the natural-pose prior (turning much of the body costs more)."),
-        click.option("--joint-limit", type=click.FloatRange(0, 180, min_open=True), default=d.joint_limit,
-                     show_default=True, help="Largest rotation of any joint, degrees (one angle)."),
+        click.option("--joint-limit", type=click.FloatRange(0, 180), default=d.joint_limit,
+                     show_default=True, help="Largest rotation of any joint, degrees (one angle); 0 with "
+                                             "--orient free turns the model without posing it."),
+        click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
+                     help="free: choose the print orientation with the pose (-o is written turned); "
+                          "keep: print the model as it stands."),
         click.option("--limit", "limits", multiple=True,
                      help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
         click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
@@ -173,9 +177,10 @@ def _run_search(rig, console, settings, quiet=False):
             fixed = settings.fixed_bones(rig)
         except ValueError as exc:
             raise InputError(None, str(exc)) from None
-        if fixed.all():
+        if fixed.all() and settings.orient == "keep":
             raise InputError(None, f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} rest on the "
-                                   "build plate or join bones that do): free some with --free 2,3 or --free all")
+                                   "build plate or join bones that do): free some with --free 2,3 or --free all, "
+                                   "or let the search turn it with --orient free")
         return optimize(rig, settings, callback=callback)
 
 
@@ -207,20 +212,35 @@ def _summary_table(report: dict):
     table.add_row("stability margin (of the height)", f"{100 * b['stability_margin']:.1f} %",
                   f"{100 * a['stability_margin']:.1f} %", "stands" if a["stands"] else "FALLS OVER")
     table.add_row("largest joint rotation", "0°", f"{report['largest_rotation_deg']:.0f}°", "")
+    rot = report.get("print_rotation")
+    if rot and rot["angle_deg"]:
+        up = report["up"]
+        table.add_row("printed turned by", "0°", f"{rot['angle_deg']:.0f}°",
+                      f"model {[round(x, 2) for x in rot['printing_direction_in_model_frame']]} up, was {up}")
+        table.add_row("support standing (prism)", f"{b['support_prism']:.4g}", f"{a['upright']['support_prism']:.4g}",
+                      pct(None if b["support_prism"] <= 0 else
+                          100 * (1 - a["upright"]["support_prism"] / b["support_prism"])))
     return table
 
 
-def _write_outputs(rig, result, report, output, pose, report_path, pictures, console):
-    """Write the posed mesh, the pose, the pictures and the report; returns [(label, path)]."""
+def _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=None):
+    """Write the posed mesh (print orientation), the upright mesh, the pose, the pictures and the report.
+
+    Returns [(label, path)].
+    """
     from .io import write_json, write_mesh, write_pose
     from .report import write_pictures
 
     written = []
     if output:
-        write_mesh(output, result.vertices, rig.faces)
-        written.append(("posed mesh", output))
+        write_mesh(output, result.print_vertices, rig.faces)
+        written.append(("posed mesh, as printed", output))
+    if upright:
+        write_mesh(upright, result.vertices, rig.faces)
+        written.append(("posed mesh, standing", upright))
     if pose:
-        write_pose(pose, result.angles, rig.bones, rig.joints, extra={"objective": result.value})
+        write_pose(pose, result.angles, rig.bones, rig.joints, extra={"objective": result.value},
+                   rotation=result.rotation)
         written.append(("pose", pose))
     if pictures:
         written += write_pictures(pictures, rig, result, report)
@@ -237,7 +257,10 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
 @rig_options
 @_search_options
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
-              help="Posed mesh to write (.stl, .obj, .ply, .off, .3mf, .glb).")
+              help="Posed mesh to write in its print orientation, lowest point on the plate, up along --up "
+                   "(.stl, .obj, .ply, .off, .3mf, .glb).")
+@click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
+              help="Also write the posed mesh standing as the input stood.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="JSON report.")
 @click.option("--pose", type=click.Path(dir_okay=False), default=None, help="Pose JSON (for `apply`).")
 @click.option("--pictures", type=click.Path(file_okay=False), default=None,
@@ -245,15 +268,13 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, report_path, pose, pictures,
-             slice_check_flag, quiet, **search_options):
-    """Search a pose of MODEL that needs less support, and write it."""
-    from .io import MESH_FORMATS
+def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, upright_out, report_path, pose,
+             pictures, slice_check_flag, quiet, **search_options):
+    """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
 
-    ext = Path(output).suffix.lower().lstrip(".")
-    if ext not in MESH_FORMATS:
-        raise InputError(output, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    for path in (output, upright_out):
+        _check_mesh_path(path)
     settings = _settings(**search_options)
     console = _console()
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
@@ -262,7 +283,7 @@ def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, re
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
     report = build_report(rig, result)
     _print_results(console, report)
-    _write_outputs(rig, result, report, output, pose, report_path, pictures, console)
+    _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=upright_out)
     if slice_check_flag:
         _slice_and_report(rig, result, report, report_path, console)
 
@@ -290,10 +311,10 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
             sys.exit(EXIT_MISSING_TOOL)
         console.print(message)
         return None
-    console.print("slicing rest and posed meshes with PrusaSlicer ...")
+    console.print("slicing the rest pose standing and the found pose as printed with PrusaSlicer ...")
     up3 = np.append(rig.up, 0.0) if rig.dim == 2 else rig.up
     try:
-        sliced = slice_check((rig.vertices, rig.faces), (result.vertices, rig.faces), up=up3,
+        sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=up3,
                              height_mm=height_mm).to_dict()
     except SlicerError as exc:
         click.echo(f"supportless: error: slice check failed: {exc}; the other outputs are written", err=True)
@@ -313,16 +334,37 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
 @click.argument("model", type=click.Path(dir_okay=False))
 @rig_options
 @click.option("--pose", type=click.Path(dir_okay=False), required=True, help="Pose JSON from `optimize --pose`.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True, help="Posed mesh to write.")
-def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output):
-    """Apply a saved pose to MODEL and write the posed mesh."""
-    from .io import read_pose, write_mesh
-    from .geometry import place_on_plate
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="Posed mesh to write, in the pose's print orientation.")
+@click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
+              help="Also write the posed mesh standing as the input stood.")
+def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output, upright_out):
+    """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh."""
+    from .geometry import place_on_plate, print_pose
+    from .io import read_pose, read_print_rotation, write_mesh
 
+    for path in (output, upright_out):
+        _check_mesh_path(path)
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
     angles = read_pose(pose, rig.bones)
-    write_mesh(output, place_on_plate(rig.pose(angles), rig.up), rig.faces)
+    R = read_print_rotation(pose, rig.dim)
+    standing = place_on_plate(rig.pose(angles), rig.up)
+    write_mesh(output, print_pose(standing, R, rig.up), rig.faces)
     click.echo(f"wrote {output}")
+    if upright_out:
+        write_mesh(upright_out, standing, rig.faces)
+        click.echo(f"wrote {upright_out}")
+
+
+def _check_mesh_path(path) -> None:
+    """A mesh output path with a known format, or InputError (None is allowed)."""
+    from .io import MESH_FORMATS
+
+    if path is None:
+        return
+    ext = Path(path).suffix.lower().lstrip(".")
+    if ext not in MESH_FORMATS:
+        raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
 
 
 # --------------------------------------------------------------------------- #
@@ -396,7 +438,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     posed_ext = "stl" if rig.dim == 3 else "obj"
     report_path = out / f"{figure}-report.json"
     _write_outputs(rig, result, report, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
-                   report_path, out, console)
+                   report_path, out, console, upright=out / f"{figure}-posed-standing.{posed_ext}")
     if rig.dim == 3:  # the slicer's figures when PrusaSlicer is there; the demo runs without it
         _slice_and_report(rig, result, report, report_path, console, required=False)
 

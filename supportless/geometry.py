@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["parse_up", "place_on_plate", "print_pose", "signed_volume"]
+__all__ = ["parse_up", "place_on_plate", "print_pose", "print_transform", "signed_volume"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -98,12 +98,12 @@ def place_on_plate(vertices: np.ndarray, up: np.ndarray) -> np.ndarray:
     return vertices - (vertices @ up).min() * up
 
 
-def print_pose(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """A surface turned into its print orientation and placed on the plate.
+def print_transform(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """The translation that, after ``rotation``, puts a surface in its print place.
 
     The surface is turned by ``rotation`` about its bounding-box centre (so it
     stays where it was across the plate) and moved along ``up`` so its lowest
-    point is at 0.
+    point is at 0: ``printed = vertices @ rotation.T + shift``.
 
     Parameters
     ----------
@@ -117,8 +117,27 @@ def print_pose(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np
 
     Returns
     -------
+    shift : (d,) float64
+    """
+    V = np.asarray(vertices, np.float64)
+    R = np.asarray(rotation, np.float64)
+    centre = 0.5 * (V.min(axis=0) + V.max(axis=0))
+    shift = centre - R @ centre
+    return shift - ((V @ R.T + shift) @ up).min() * up
+
+
+def print_pose(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """A surface turned into its print orientation and placed on the plate (see :func:`print_transform`).
+
+    Parameters
+    ----------
+    vertices : (n, d) float64
+    rotation : (d, d) float64
+    up : (d,) float64
+
+    Returns
+    -------
     printed : (n, d) float64
     """
     V = np.asarray(vertices, np.float64)
-    centre = 0.5 * (V.min(axis=0) + V.max(axis=0))
-    return place_on_plate((V - centre) @ np.asarray(rotation, np.float64).T + centre, up)
+    return V @ np.asarray(rotation, np.float64).T + print_transform(V, rotation, up)

@@ -23,7 +23,7 @@ from .errors import InputError
 
 __all__ = [
     "MESH_FORMATS", "POSE_FORMAT", "atomic_path", "check_closed_surface", "check_mesh_arrays", "edge_counts",
-    "merge_duplicate_vertices", "read_dmat", "read_mesh", "read_pose", "read_tet_mesh", "read_tgf", "write_dmat",
+    "merge_duplicate_vertices", "read_dmat", "read_mesh", "read_pose", "read_print_rotation", "read_tet_mesh", "read_tgf", "write_dmat",
     "write_json", "write_mesh", "write_pose", "write_tet_mesh", "write_text", "write_tgf",
 ]
 
@@ -532,7 +532,7 @@ POSE_FORMAT = "supportless-pose"
 
 
 def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, joints: np.ndarray | None = None,
-               extra: dict | None = None) -> None:
+               extra: dict | None = None, rotation: np.ndarray | None = None) -> None:
     """Write a pose (Euler angles per bone) as JSON, atomically.
 
     Parameters
@@ -547,6 +547,9 @@ def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, j
         Stored for reference.
     extra : dict, optional
         More fields (e.g. the objective value).
+    rotation : (d, d) float64, optional
+        The print rotation R (the posed model is printed turned by R), stored
+        as ``print_rotation``; read back with :func:`read_print_rotation`.
     """
     angles = np.asarray(angles, np.float64)
     data = {
@@ -559,6 +562,8 @@ def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, j
     }
     if joints is not None:
         data["joints"] = np.asarray(joints).tolist()
+    if rotation is not None:
+        data["print_rotation"] = np.asarray(rotation, np.float64).tolist()
     if extra:
         data.update(extra)
     write_json(path, data)
@@ -598,3 +603,39 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.nd
                 "use the skeleton the pose was made with",
             )
     return angles
+
+
+def read_print_rotation(path: str | os.PathLike, dim: int = 3) -> np.ndarray:
+    """The print rotation stored in a pose file (the identity when there is none).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A pose file of :func:`write_pose`.
+    dim : int
+        The rig's dimension (2 or 3).
+
+    Returns
+    -------
+    R : (dim, dim) float64
+
+    Raises
+    ------
+    InputError
+        When ``print_rotation`` is not a ``dim`` x ``dim`` rotation matrix.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"not a pose file: {_one_line(exc)}") from None
+    if "print_rotation" not in data:
+        return np.eye(dim)
+    try:
+        R = np.asarray(data["print_rotation"], np.float64)
+    except (ValueError, TypeError):
+        R = np.zeros(0)
+    if R.shape != (dim, dim) or not np.allclose(R @ R.T, np.eye(dim), atol=1e-6) or np.linalg.det(R) < 0:
+        raise InputError(path, f"'print_rotation' must be a {dim}x{dim} rotation matrix (rows of numbers); "
+                               "remove it to print the pose as it stands")
+    return R

@@ -19,14 +19,23 @@ from .energies.exact import intersecting_face_pairs
 from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.support import support_volume
-from .geometry import place_on_plate
+from .geometry import place_on_plate, print_transform
+from .orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
 __all__ = ["build_report", "pose_measures", "reduction", "write_pictures"]
 
 
+def _support_measures(V, faces, up, angle, resolution) -> dict:
+    return {
+        "support_prism": float(overhang_energy(V, faces, up, angle)),
+        "support_column": float(support_volume(V, faces, up, angle, resolution)),
+        "risky_area": float(risky_area(V, faces, up, angle)),
+    }
+
+
 def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None,
-                  vertices: np.ndarray | None = None) -> dict:
+                  vertices: np.ndarray | None = None, rotation: np.ndarray | None = None) -> dict:
     """Everything a report says about one pose.
 
     Parameters
@@ -41,6 +50,10 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         Threshold of the support measures (default: the objective's).
     vertices : (n, d) float64, optional
         ``objective.rig.pose(angles)`` when the caller has it already.
+    rotation : (d, d) float64, optional
+        The print rotation: the support measures (and the objective) are
+        then those of the print frame, and ``upright`` holds the support
+        measures of the pose as it stands.
 
     Returns
     -------
@@ -53,22 +66,24 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         and ``objective``, contact and balance (``new_contact_vertices``,
         ``stability_margin``, ``stands``, ``centre_of_mass``; see
         :meth:`supportless.standing.Standing.measures`), and
-        ``intersecting_face_pairs`` (when ``exact``).
+        ``intersecting_face_pairs`` (when ``exact``). Contact, balance and
+        distortion are always judged as the pose stands.
     """
     rig = objective.rig
     V = rig.pose(angles) if vertices is None else vertices
-    value, terms, raw = objective.evaluate(angles)
+    value, terms, raw = objective.evaluate(angles, rotation)
     angle = objective.overhang_angle if overhang_angle is None else overhang_angle
+    printed = V if rotation is None else V @ np.asarray(rotation, np.float64).T
     out = {
         "objective": float(value),
         "terms": {k: float(v) for k, v in terms.items()},
         "arap": float(raw["arap"]),
         "overhang_angle": float(angle),
-        "support_prism": float(overhang_energy(V, rig.faces, rig.up, angle)),
-        "support_column": float(support_volume(V, rig.faces, rig.up, angle, objective.resolution)),
-        "risky_area": float(risky_area(V, rig.faces, rig.up, angle)),
+        **_support_measures(printed, rig.faces, rig.up, angle, objective.resolution),
         "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
     }
+    if rotation is not None:
+        out["upright"] = _support_measures(V, rig.faces, rig.up, angle, objective.resolution)
     out |= objective.standing.measures(rig.transforms(angles), V)
     if exact:
         out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
@@ -104,13 +119,20 @@ def build_report(rig, result) -> dict:
     report : dict
         Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
         printer's threshold ``result.settings.overhang_angle``), their
-        ``reduction_percent``, the largest and RMS vertex displacement, each
+        ``reduction_percent``, the ``print_rotation`` and which ``frames``
+        the figures are in, the largest and RMS vertex displacement, each
         bone's rotation (one angle, degrees) and the largest, the Euler
         angles, runtime, settings and convergence history.
+
+        ``before`` is the rest pose as it stands; ``after`` is the found
+        pose in its print orientation (support counted there), with
+        ``after["upright"]`` the support of the same pose as it stands.
     """
     objective, angle = result.objective, result.settings.overhang_angle
+    R = np.asarray(result.rotation, np.float64)
     before = pose_measures(objective, rig.rest_angles(), overhang_angle=angle)
-    after = pose_measures(objective, result.angles, overhang_angle=angle)
+    after = pose_measures(objective, result.angles, overhang_angle=angle, rotation=R)
+    axis, degrees = rotation_axis_angle(R)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
     turned = np.degrees(objective.prior.angles(result.angles))
@@ -127,6 +149,19 @@ def build_report(rig, result) -> dict:
             "support_prism": reduction(before["support_prism"], after["support_prism"]),
             "support_column": reduction(before["support_column"], after["support_column"]),
             "risky_area": reduction(before["risky_area"], after["risky_area"]),
+        },
+        "print_rotation": {
+            "orient": result.settings.orient,
+            "matrix": R.round(12).tolist(),
+            "axis": None if axis is None else axis.round(12).tolist(),
+            "angle_deg": round(degrees, 6),
+            "printing_direction_in_model_frame": print_direction(R, rig.up).round(12).tolist(),
+        },
+        "frames": {
+            "before": "rest pose, standing as the input stood (the display frame)",
+            "after": "found pose turned by print_rotation, lowest point on the plate (the print frame): "
+                     "the mesh to slice; its contact, balance and distortion are judged standing",
+            "after.upright": "found pose standing as the input stood (the display frame)",
         },
         "max_vertex_displacement": float(displacement.max()),
         "max_vertex_displacement_relative_to_height": float(displacement.max() / height) if height else None,
@@ -150,7 +185,12 @@ def _cpu_count() -> int:
 
 
 def write_pictures(folder, rig, result, report: dict | None = None) -> list[tuple[str, str]]:
-    """Before/after renders (same camera, risky faces red, skeleton, balance) and a convergence plot.
+    """Before/after renders (same camera, risky faces red, skeleton, balance), the print orientation, convergence.
+
+    ``before_after.png`` shows the rest pose and the found pose standing as
+    the input stood; ``print.png`` (when the search turned the model) shows
+    the found pose standing beside the same pose in its print orientation on
+    the plate, risky faces counted in each frame.
 
     Risky faces are those past the printer's threshold
     (``result.settings.overhang_angle``), as the report counts them.
@@ -192,12 +232,29 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
         after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
         titles=("rest pose", "found pose"),
         before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
-        suptitle=f"{rig.name}: support (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg); "
+        suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg); "
                  "green = support polygon, ring = centre of mass")
+    written = [("before/after picture", str(before_after))]
+    R = np.asarray(result.rotation, np.float64)
+    if not np.allclose(R, np.eye(rig.dim)):
+        printed = np.asarray(result.print_vertices, np.float64)
+        shift = print_transform(posed, R, rig.up)
+        axis, degrees = rotation_axis_angle(R)
+        direction = np.round(print_direction(R, rig.up), 2).tolist()
+        printed_change = (report or {}).get("reduction_percent", {}).get("support_prism")
+        written.append(("print orientation picture", str(render_before_after(
+            folder / "print.png", (posed, rig.faces), (printed, rig.faces), rig.up,
+            before_skeleton=(joints_posed, rig.bones), after_skeleton=(joints_posed @ R.T + shift, rig.bones),
+            before_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
+            after_risky=risky_faces(printed, rig.faces, rig.up, angle) if risky else None,
+            titles=("found pose, standing", f"as printed: turned {degrees:.0f} deg, model {direction} up"),
+            before_balance=balance(result.angles, shift_posed),
+            suptitle=f"{rig.name}: print orientation; support (prism) against the rest pose standing: "
+                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:g} deg)"))))
     terms = {k: v for k, v in result.term_history.items() if len(v)}
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")
-    return [("before/after picture", str(before_after)), ("convergence plot", str(convergence))]
+    return written + [("convergence plot", str(convergence))]
 
 
 def _fmt_pct(x) -> str:

@@ -174,11 +174,11 @@ def test_ctrl_c_during_the_search_writes_the_best_pose(branch_files, tmp_path, m
     calls = {"n": 0}
     bounded = Objective.bounded
 
-    def interrupt_on_third_call(self, angles, bound):
+    def interrupt_on_third_call(self, angles, bound, rotations=None):
         calls["n"] += 1
         if calls["n"] == 3:
             raise KeyboardInterrupt
-        return bounded(self, angles, bound)
+        return bounded(self, angles, bound, rotations)
 
     monkeypatch.setattr(Objective, "bounded", interrupt_on_third_call)
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
@@ -281,3 +281,60 @@ def test_real_executable_prints_one_line(tmp_path):
     assert proc.stderr.strip() == f"supportless: error: {tmp_path / 'missing.stl'}: no such file"
     assert "Traceback" not in proc.stderr + proc.stdout
     assert proc.stdout == ""
+
+
+def test_print_rotation_round_trips_through_apply(branch_files, tmp_path):
+    """`optimize -o` writes the pose as printed, `--upright-out` standing; `apply` reproduces both from the pose file."""
+    common = [branch_files["mesh"], "--cache-dir", branch_files["cache"]]
+    result = run("optimize", *common, "--particles", 10, "--iterations", 4, "--seed", 2, "-q",
+                 "-o", tmp_path / "printed.obj", "--upright-out", tmp_path / "standing.obj",
+                 "--pose", tmp_path / "pose.json", "--report", tmp_path / "report.json")
+    assert result.exit_code == 0, result.output
+    rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
+    R = sl.io.read_print_rotation(tmp_path / "pose.json", 3)
+    assert not np.allclose(R, np.eye(3))  # the branch is turned to print
+    report = json.loads((tmp_path / "report.json").read_text())
+    np.testing.assert_allclose(report["print_rotation"]["matrix"], R, atol=1e-12)
+    printed, _ = sl.read_mesh(tmp_path / "printed.obj")
+    standing, _ = sl.read_mesh(tmp_path / "standing.obj")
+    angles = sl.read_pose(tmp_path / "pose.json", rig.bones)
+    np.testing.assert_allclose(standing, place_on_plate(rig.pose(angles), rig.up), atol=1e-5)
+    np.testing.assert_allclose(printed, sl.geometry.print_pose(standing, R, rig.up), atol=1e-4)
+    assert printed[:, 1].min() == pytest.approx(0.0, abs=1e-5)
+    again = run("apply", *common, "--pose", tmp_path / "pose.json", "-o", tmp_path / "a-printed.obj",
+                "--upright-out", tmp_path / "a-standing.obj")
+    assert again.exit_code == 0, again.output
+    np.testing.assert_array_equal(sl.read_mesh(tmp_path / "a-printed.obj")[0], printed)
+    np.testing.assert_array_equal(sl.read_mesh(tmp_path / "a-standing.obj")[0], standing)
+
+
+def test_orient_keep_writes_the_pose_standing(branch_files, tmp_path):
+    common = [branch_files["mesh"], "--cache-dir", branch_files["cache"]]
+    result = run("optimize", *common, "--particles", 6, "--iterations", 2, "-q", "--orient", "keep",
+                 "-o", tmp_path / "printed.obj", "--upright-out", tmp_path / "standing.obj",
+                 "--pose", tmp_path / "pose.json")
+    assert result.exit_code == 0, result.output
+    np.testing.assert_array_equal(sl.read_mesh(tmp_path / "printed.obj")[0], sl.read_mesh(tmp_path / "standing.obj")[0])
+    np.testing.assert_array_equal(sl.io.read_print_rotation(tmp_path / "pose.json", 3), np.eye(3))
+
+
+def test_a_bad_print_rotation_is_one_line(branch_files, tmp_path):
+    rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
+    sl.write_pose(tmp_path / "pose.json", np.zeros((rig.bone_count, 3)), rig.bones, rotation=2 * np.eye(3))
+    result = run("apply", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--pose",
+                 tmp_path / "pose.json", "-o", tmp_path / "posed.obj")
+    assert result.exit_code == 2
+    assert "print_rotation" in result.output and "rotation matrix" in result.output
+    assert not (tmp_path / "posed.obj").exists()
+
+
+def test_turning_only_needs_no_free_bone(branch_files, tmp_path):
+    """`--joint-limit 0` holds every joint: with `--orient free` the model is only turned."""
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 8,
+                 "--iterations", 3, "-q", "--joint-limit", 0, "-o", tmp_path / "turned.obj",
+                 "--pose", tmp_path / "pose.json")
+    assert result.exit_code == 0, result.output
+    assert np.all(np.asarray(json.loads((tmp_path / "pose.json").read_text())["angles"]) == 0)
+    keep = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "-q", "--joint-limit", 0,
+               "--orient", "keep", "-o", tmp_path / "kept.obj")
+    assert keep.exit_code == 2 and "--orient free" in keep.output

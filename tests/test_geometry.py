@@ -47,3 +47,24 @@ def test_place_on_plate_along_any_up():
     out = place_on_plate(V, up)
     assert (out @ up).min() == 0.0
     np.testing.assert_array_equal(out[:, :2], V[:, :2])
+
+
+def test_print_pose_is_a_rigid_turn_onto_the_plate():
+    from scipy.spatial.transform import Rotation
+
+    from supportless.geometry import print_pose, print_transform
+
+    rng = np.random.default_rng(0)
+    V = rng.normal(size=(40, 3)) + [5.0, 3.0, -2.0]
+    R = Rotation.from_rotvec([0.4, -1.1, 0.3]).as_matrix()
+    up = np.array([0.0, 1.0, 0.0])
+    P = print_pose(V, R, up)
+    np.testing.assert_allclose(P, V @ R.T + print_transform(V, R, up), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(P[:, None] - P[None], axis=-1),
+                               np.linalg.norm(V[:, None] - V[None], axis=-1), atol=1e-10)  # rigid
+    assert (P @ up).min() == pytest.approx(0.0, abs=1e-12)  # on the plate
+    # turned about the bounding-box centre: it stays where it was across the plate
+    centre = 0.5 * (V.min(0) + V.max(0))
+    moved = (V - centre) @ R.T + centre
+    np.testing.assert_allclose(P - moved, np.outer(np.ones(len(V)), (P - moved)[0]), atol=1e-12)
+    assert abs((P - moved)[0] @ [1, 0, 0]) < 1e-12 and abs((P - moved)[0] @ [0, 0, 1]) < 1e-12

@@ -52,3 +52,68 @@ def test_ranking_matches_the_energy_of_the_turned_mesh(tpose_rig):
     for u, s in zip(ups, support):
         turned = V @ rotation_between(u, np.array([0.0, 1.0, 0.0])).T
         assert sl.overhang_energy(turned, F, "y") == pytest.approx(s, rel=1e-9)
+
+
+# --------------------------------------------------------------------------- #
+# the search's orientation variables
+# --------------------------------------------------------------------------- #
+from scipy.spatial.transform import Rotation  # noqa: E402
+
+from supportless.orientation import (  # noqa: E402
+    orientation_params, print_direction, rotation_axis_angle, rotations_from_params, seed_params, tangent_basis)
+
+
+@pytest.mark.parametrize("up", [[0, 1, 0], [0, 0, 1], [1, -2, 0.5]])
+def test_orientation_variables_are_a_rotation_vector_orthogonal_to_up(up):
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    B = tangent_basis(up)
+    np.testing.assert_allclose(B @ B.T, np.eye(2), atol=1e-12)
+    np.testing.assert_allclose(B @ up, 0.0, atol=1e-12)
+    X = np.random.default_rng(1).uniform(-np.pi, np.pi, (50, 2))
+    R = rotations_from_params(X, up)
+    np.testing.assert_allclose(R, Rotation.from_rotvec(X @ B).as_matrix(), atol=1e-12)  # scipy's exponential map
+    np.testing.assert_allclose(rotations_from_params(np.zeros((1, 2)), up)[0], np.eye(3), atol=0)
+
+
+@pytest.mark.parametrize("up", [[0, 1, 0], [0.3, 0.2, -1.0]])
+def test_orientation_params_invert_the_smallest_rotation_to_up(up):
+    up = np.asarray(up, float) / np.linalg.norm(up)
+    rng = np.random.default_rng(2)
+    for u in [*rng.normal(size=(20, 3)), -up, up]:
+        u = u / np.linalg.norm(u)
+        R = rotation_between(u, up)
+        x = orientation_params(R, up)
+        assert np.linalg.norm(x) <= np.pi + 1e-12
+        back = rotations_from_params(x[None], up)[0]
+        np.testing.assert_allclose(back @ u, up, atol=1e-9)
+        np.testing.assert_allclose(print_direction(back, up), u, atol=1e-9)
+    # a turn about up is dropped: the same printing direction, the same variables
+    turn = Rotation.from_rotvec(0.7 * up).as_matrix()
+    R = rotation_between(np.array([1.0, 0, 0]) - up * up[0], up) if abs(up[0]) < 0.99 else np.eye(3)
+    np.testing.assert_allclose(orientation_params(turn @ R, up), orientation_params(R, up), atol=1e-9)
+
+
+def test_planar_orientation_is_one_angle():
+    up = np.array([0.0, 1.0])
+    R = rotations_from_params(np.array([[0.5], [-2.0]]), up)
+    np.testing.assert_allclose(R[0], [[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]])
+    assert orientation_params(R[1], up)[0] == pytest.approx(-2.0)
+    axis, degrees = rotation_axis_angle(R[0])
+    assert axis is None and degrees == pytest.approx(np.degrees(0.5))
+    axis, degrees = rotation_axis_angle(Rotation.from_rotvec([0, 0, -1.2]).as_matrix())
+    np.testing.assert_allclose(axis, [0, 0, -1], atol=1e-12)
+    assert degrees == pytest.approx(np.degrees(1.2))
+
+
+def test_seeds_are_the_cheapest_candidates_and_never_upright():
+    rod = trimesh.creation.cylinder(radius=1.0, height=10.0, sections=32)
+    rod.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))
+    V, F = np.asarray(rod.vertices), np.asarray(rod.faces, np.int64)
+    up = np.array([0.0, 1.0, 0.0])
+    X = seed_params(V, F, up, 3)
+    assert X.shape == (3, 2) and np.all(np.linalg.norm(X, axis=1) > 1e-6)
+    first = print_direction(rotations_from_params(X[:1], up)[0], up)
+    assert abs(first[0]) > 0.999  # stood on a flat end
+    ranks = [sl.overhang_energy(V @ rotations_from_params(x[None], up)[0].T, F, up) for x in X]
+    assert ranks == sorted(ranks)
+    assert len(seed_params(V, F, up, 0)) == 0

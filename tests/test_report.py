@@ -50,7 +50,22 @@ def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(bra
     assert rep["before"]["overhang_angle"] == rep["after"]["overhang_angle"] == 40.0
     rest = rig.pose(rig.rest_angles())  # linear blend skinning at rest: the rest surface to the last bits
     assert rep["before"]["support_prism"] == sl.overhang_energy(rest, rig.faces, rig.up, 40.0)
-    assert rep["after"]["support_prism"] == sl.overhang_energy(rig.pose(searched.angles), rig.faces, rig.up, 40.0)
+    # after: the print frame (the posed surface turned by R); after.upright: the same pose standing
+    R = searched.rotation
+    assert not np.allclose(R, np.eye(3))  # this search does turn the branch
+    printed = rig.pose(searched.angles) @ R.T
+    assert rep["after"]["support_prism"] == sl.overhang_energy(printed, rig.faces, rig.up, 40.0)
+    assert rep["after"]["support_prism"] == pytest.approx(
+        sl.overhang_energy(searched.print_vertices, rig.faces, rig.up, 40.0), rel=1e-9)
+    assert rep["after"]["upright"]["support_prism"] == sl.overhang_energy(rig.pose(searched.angles), rig.faces,
+                                                                          rig.up, 40.0)
+    rot = rep["print_rotation"]
+    np.testing.assert_allclose(rot["matrix"], R, atol=1e-12)
+    from scipy.spatial.transform import Rotation
+    np.testing.assert_allclose(np.radians(rot["angle_deg"]) * np.asarray(rot["axis"]),
+                               Rotation.from_matrix(R).as_rotvec(), atol=1e-9)
+    np.testing.assert_allclose(rot["printing_direction_in_model_frame"], R.T @ rig.up, atol=1e-12)
+    assert rot["orient"] == "free" and set(rep["frames"]) == {"before", "after", "after.upright"}
     assert rep["reduction_percent"]["support_prism"] == reduction(rep["before"]["support_prism"],
                                                                    rep["after"]["support_prism"])
     assert rep["after"]["objective"] == pytest.approx(searched.value, rel=1e-12)
@@ -65,17 +80,43 @@ def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(bra
 
 
 def test_pictures_colour_faces_past_the_printers_threshold(branch_rig, searched, tmp_path, monkeypatch):
-    seen = {}
+    seen, first = {}, {}
     original = report_mod.render_before_after
 
     def spy(path, before, after, up, **kw):
+        first.update(kw) if not first else None
         seen.update(kw)
         return original(path, before, after, up, **kw)
 
     monkeypatch.setattr(report_mod, "render_before_after", spy)
     written = write_pictures(tmp_path, branch_rig, searched, build_report(branch_rig, searched))
-    assert [label for label, _ in written] == ["before/after picture", "convergence plot"]
+    assert [label for label, _ in written] == ["before/after picture", "print orientation picture",
+                                                "convergence plot"]
+    # the print picture: the pose standing beside it turned onto the plate, risky faces of each frame
+    np.testing.assert_array_equal(seen["after_risky"], sl.risky_faces(searched.print_vertices, branch_rig.faces,
+                                                                      branch_rig.up, 40.0))
+    assert "as printed" in seen["titles"][1]
     rest = sl.geometry.place_on_plate(branch_rig.vertices, branch_rig.up)
     expected = sl.risky_faces(rest, branch_rig.faces, branch_rig.up, 40.0)
-    np.testing.assert_array_equal(seen["before_risky"], expected)
-    assert "> 40 deg" in seen["suptitle"]
+    np.testing.assert_array_equal(first["before_risky"], expected)
+    assert "> 40 deg" in first["suptitle"]
+
+
+def test_pose_measures_in_the_print_frame(branch_rig):
+    """With a print rotation, support is counted on the turned surface; contact and distortion standing."""
+    from scipy.spatial.transform import Rotation
+
+    rig = branch_rig
+    obj = SearchSettings().objective(rig)
+    angles = rig.rest_angles().copy()
+    angles[-1] = [0.1, 0.0, -0.3]
+    R = Rotation.from_rotvec([0.0, 0.0, 1.2]).as_matrix()
+    V = rig.pose(angles)
+    m = pose_measures(obj, angles, exact=False, rotation=R)
+    standing = pose_measures(obj, angles, exact=False)
+    assert m["support_prism"] == pytest.approx(sl.overhang_energy(V @ R.T, rig.faces, rig.up, obj.overhang_angle))
+    assert m["support_prism"] != pytest.approx(standing["support_prism"])
+    assert m["upright"]["support_prism"] == standing["support_prism"]
+    assert m["objective"] == pytest.approx(float(obj(angles, R)), rel=1e-12)
+    for key in ("arap", "new_contact_vertices", "stability_margin", "self_intersection_volume"):
+        assert m[key] == standing[key]

@@ -100,7 +100,7 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     assert obj.overhang_angle == 55.0
     rest = float(obj(rig.rest_angles()))
     assert a.value <= rest + 1e-12
-    assert float(obj(a.angles)) == pytest.approx(a.value, rel=1e-12)
+    assert float(obj(a.angles, a.rotation)) == pytest.approx(a.value, rel=1e-12)
     # fixed bones keep zero angles; the output sits on the plate
     assert np.all(a.angles[a.fixed] == 0)
     assert np.isclose((a.vertices @ rig.up).min(), 0.0, atol=1e-12)
@@ -113,7 +113,10 @@ def test_optimize_reduces_support_of_the_cantilever(branch_rig):
     assert res.terms["overhang"] < 0.8  # at least 20 % less support (search estimate) than at rest
     angle = res.settings.overhang_angle
     rest = sl.overhang_energy(branch_rig.vertices, branch_rig.faces, "y", angle)
-    assert sl.overhang_energy(res.vertices, branch_rig.faces, branch_rig.up, angle) < 0.8 * rest
+    assert sl.overhang_energy(res.print_vertices, branch_rig.faces, branch_rig.up, angle) < 0.8 * rest
+    posed = sl.optimize(branch_rig, particles=30, iterations=20, seed=0, orient="keep")
+    assert posed.terms["overhang"] < 0.8 and np.array_equal(posed.print_vertices, posed.vertices)
+    assert sl.overhang_energy(posed.vertices, branch_rig.faces, branch_rig.up, angle) < 0.8 * rest
 
 
 def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
@@ -122,7 +125,8 @@ def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
 
     rig = branch_rig
     settings = SearchSettings(particles=24, iterations=10, seed=0, w_intersect=0.0,
-                              w_arap=0.0, w_prior=0.0, joint_limit=170.0, keep_standing=False, free=("all",))
+                              w_arap=0.0, w_prior=0.0, joint_limit=170.0, keep_standing=False, free=("all",),
+                              orient="keep")
     gated = sl.optimize(rig, settings)
     assert gated.stats["exact_calls"] > 0
     assert intersecting_face_pairs(rig.pose(gated.angles), rig.faces) == 0
@@ -194,3 +198,94 @@ def test_search_margin_is_one_rule(branch_rig):
     res = sl.optimize(branch_rig, particles=8, iterations=2, seed=0, overhang_angle=40.0, overhang_margin=5.0)
     assert res.objective.overhang_angle == 45.0
     assert res.settings.overhang_angle == 40.0
+
+
+# --------------------------------------------------------------------------- #
+# the print orientation, searched with the pose
+# --------------------------------------------------------------------------- #
+def _turned_copy(rig, Q):
+    """The same rig turned by the rotation Q (mesh, skeleton, volume mesh; weights unchanged)."""
+    return sl.Rig(vertices=rig.vertices @ Q.T, faces=rig.faces, joints=rig.joints @ Q.T, bones=rig.bones,
+                  tet_vertices=rig.tet_vertices @ Q.T, tets=rig.tets, tet_weights=rig.tet_weights, up=rig.up,
+                  name=rig.name + "-turned")
+
+
+def _printed_support(result, rig):
+    return sl.overhang_energy(result.print_vertices, rig.faces, rig.up, result.settings.overhang_angle)
+
+
+def test_orient_keep_is_the_pose_only_search(branch_rig):
+    """``orient="keep"`` adds nothing: the swarm over the pose variables alone, the same result bit for bit."""
+    from supportless.search import particle_swarm
+    from supportless.settings import PSO_PRESETS
+    from supportless.symmetry import PoseLayout
+
+    rig, settings = branch_rig, SearchSettings(particles=16, iterations=8, seed=5, orient="keep",
+                                               exact_intersections=False)
+    kept = sl.optimize(rig, settings)
+    objective = settings.objective(rig)
+    layout = PoseLayout(rig, settings.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
+                        np.radians(settings.joint_limits(rig)))
+    swarm = particle_swarm(lambda X, bound: objective.bounded(layout.to_angles(X), bound), layout.lower,
+                           layout.upper, particles=16, iterations=8, rng=np.random.default_rng(5),
+                           initial=np.zeros((1, layout.count)), pass_bound=True, **PSO_PRESETS["standard"])
+    np.testing.assert_array_equal(kept.angles, layout.to_angles(swarm.x[None])[0])
+    assert kept.value == swarm.value
+    np.testing.assert_array_equal(kept.rotation, np.eye(3))
+    np.testing.assert_array_equal(kept.print_vertices, kept.vertices)
+
+
+def test_free_orientation_is_never_worse_than_keeping_it(branch_rig):
+    """The search starts at upright, so turning is an option, never a loss (by the objective)."""
+    settings = SearchSettings(particles=20, iterations=10, seed=0)
+    free = sl.optimize(branch_rig, settings)
+    rest = float(settings.objective(branch_rig)(branch_rig.rest_angles()))
+    assert free.value <= rest
+    R = free.rotation
+    np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(R) == pytest.approx(1.0)
+    # the objective's overhang term is the print frame's support
+    printed = sl.overhang_energy(free.print_vertices, branch_rig.faces, branch_rig.up, 55.0)
+    assert free.terms["overhang"] == pytest.approx(printed / free.objective.overhang_scale, rel=1e-9)
+    # contact and balance stay in the display frame: the standing mesh keeps its feet on the plate
+    assert free.objective.standing.measures(branch_rig.transforms(free.angles), branch_rig.pose(free.angles))[
+        "new_contact_vertices"] == 0
+
+
+def test_a_rod_lying_flat_is_turned_to_print_upright(tmp_path):
+    """A lying rod with every joint held (turning only) is stood on its end, where it needs no support."""
+    import trimesh
+
+    rod = trimesh.creation.cylinder(radius=1.0, height=10.0, sections=24)
+    rod.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [0, 1, 0]))  # along x, lying
+    V = np.asarray(rod.vertices) + [0.0, 1.0, 0.0]
+    joints = np.array([[-4.0, 1.0, 0.0], [0.0, 1.0, 0.0], [4.0, 1.0, 0.0]])
+    rig = sl.prepare_rig(V, np.asarray(rod.faces), joints, np.array([[0, 1], [1, 2]]), up="y", name="rod")
+    turned = sl.optimize(rig, particles=20, iterations=15, seed=0, joint_limit=0.0)
+    direction = turned.rotation.T @ rig.up
+    assert abs(direction[0]) > 0.99  # printed along its axis
+    rest = sl.overhang_energy(rig.vertices, rig.faces, rig.up, 45.0)
+    assert _printed_support(turned, rig) < 1e-6 * rest
+    np.testing.assert_array_equal(turned.angles, 0.0)  # every joint held
+    kept = sl.optimize(rig, particles=20, iterations=15, seed=0, joint_limit=0.0, orient="keep")
+    assert _printed_support(kept, rig) == pytest.approx(rest)
+
+
+def test_a_turned_copy_finds_the_same_support(branch_rig):
+    """The orientation search does not depend on how the input happened to be turned."""
+    from scipy.spatial.transform import Rotation
+
+    settings = SearchSettings(particles=30, iterations=25, seed=0, joint_limit=0.0)
+    base = sl.optimize(branch_rig, settings)
+    for rotvec in ([np.pi / 2, 0, 0], [0.3, 1.0, -0.6]):
+        copy = _turned_copy(branch_rig, Rotation.from_rotvec(rotvec).as_matrix())
+        found = sl.optimize(copy, settings)
+        assert _printed_support(found, copy) == pytest.approx(_printed_support(base, branch_rig), rel=0.05)
+
+
+def test_planar_search_turns_in_the_plane():
+    rig = sl.prepare_rig(*sl.demo_figure("woody2d"), up="y")
+    result = sl.optimize(rig, particles=16, iterations=6, seed=0)
+    assert result.rotation.shape == (2, 2) and result.print_vertices.shape == rig.vertices.shape
+    np.testing.assert_allclose(result.rotation @ result.rotation.T, np.eye(2), atol=1e-12)
+    assert (result.print_vertices @ rig.up).min() == pytest.approx(0.0, abs=1e-9)
