@@ -87,6 +87,9 @@ class Objective:
     keep_standing : bool
         A pose that touches the plate with a new part or falls over does not
         count (:class:`supportless.standing.Standing`).
+    support_floor : float
+        Fixed cost of support however low it is, as a height added to every
+        prism, in units of the model's rest height (the ``prism`` model).
 
     Poses that break a hard rule (a joint limit, or standing) get the value
     ``INFEASIBLE + violation``: worse than any pose that keeps the rules, and
@@ -97,7 +100,7 @@ class Objective:
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
                  clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
-                 joint_limits=180.0, keep_standing: bool = True):
+                 joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -115,6 +118,7 @@ class Objective:
             self.__dict__["arap_data"] = arap_data  # fills the cached property below
         self.w_prior = float(w_prior)
         self.keep_standing = bool(keep_standing)
+        self.support_floor = float(support_floor)
         self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
 
     # ------------------------------------------------------------ precompute
@@ -157,7 +161,13 @@ class Objective:
         if self.overhang_model == "column":
             return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
                                   backend=self.backend)
-        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend)
+        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend,
+                               floor=self.support_floor * self.height)
+
+    @cached_property
+    def height(self) -> float:
+        """Rest height of the model along up."""
+        return float(np.ptp(self.rig.vertices @ self.rig.up))
 
     def _posed(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bone transforms (P, m, d, d+1) and posed surface vertices (P, n, d) of a batch."""
@@ -272,5 +282,6 @@ class Objective:
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
                 "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
-                "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing}
+                "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
+                "support_floor": self.support_floor}
 

@@ -104,6 +104,9 @@ class SearchSettings:
     orient_seeds : int
         With ``orient="free"``, particles started (at the rest pose) at this
         many of the best-ranked candidate printing directions.
+    support_floor : float
+        Fixed cost of support however low it is: a height added to every
+        prism of the estimate, as a fraction of the model's height.
     clusters : int or None
         Rotation clusters of the reduced ARAP energy.
     resolution : int
@@ -132,6 +135,7 @@ class SearchSettings:
     symmetric: bool = False
     orient: str = "free"
     orient_seeds: int = ORIENT_SEEDS
+    support_floor: float = 0.0
     clusters: int | None = 100
     resolution: int = 192
     backend: str = "fast"
@@ -194,7 +198,7 @@ class SearchSettings:
                          overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
-                         keep_standing=self.keep_standing)
+                         keep_standing=self.keep_standing, support_floor=self.support_floor)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.

@@ -225,3 +225,20 @@ def test_projected_risky_area_of_a_box_is_its_bottom():
     V2, F2 = cells_mesh([(0, 0), (1, 0), (2, 0), (1, 1)])
     assert projected_risky_area(V2, F2, np.array([0.0, 1.0])) == pytest.approx(3.0, rel=1e-12)
     assert projected_risky_area(V2, F2[:, ::-1], np.array([0.0, 1.0])) == pytest.approx(3.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("backend", ["fast", "numpy"])
+def test_floor_adds_a_fixed_height_under_every_risky_face(backend):
+    """``floor`` raises every prism by the same height: + floor x the projected risky area (length in 2D)."""
+    V, F = t_shape()
+    rng = np.random.default_rng(4)
+    for up in ([0, 1, 0], rng.normal(size=3)):
+        up = np.asarray(up, float) / np.linalg.norm(up)
+        plain = overhang_energy(V, F, up, 45.0, backend=backend)
+        raised = overhang_energy(V, F, up, 45.0, backend=backend, floor=0.7)
+        assert raised == pytest.approx(plain + 0.7 * projected_risky_area(V, F, up, 45.0), rel=1e-12)
+    tri = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0], [0.0, 3.0], [-1.0, 3.0], [-1.0, 1.0]])
+    T = np.array([[0, 1, 2], [0, 2, 3], [3, 4, 5], [3, 5, 6]])
+    plain = overhang_energy(tri, T, [0.0, 1.0], 45.0, backend=backend)
+    raised = overhang_energy(tri, T, [0.0, 1.0], 45.0, backend=backend, floor=0.5)
+    assert raised == pytest.approx(plain + 0.5 * projected_risky_area(tri, T, [0.0, 1.0], 45.0), rel=1e-12)

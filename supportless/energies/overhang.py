@@ -32,7 +32,7 @@ __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area
 
 
 @njit(cache=True, parallel=True)
-def _kernel3(V, F, up, orient, tau, mask):
+def _kernel3(V, F, up, orient, tau, mask, floor):
     """Energy and risky area per pose (3D).
 
     ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (3,) float64
@@ -70,7 +70,7 @@ def _kernel3(V, F, up, orient, tau, mask):
                     risky = True
                     h = ((X[a, 0] + X[b, 0] + X[c, 0]) * ux
                          + (X[a, 1] + X[b, 1] + X[c, 1]) * uy
-                         + (X[a, 2] + X[b, 2] + X[c, 2]) * uz) / 3.0 - plate
+                         + (X[a, 2] + X[b, 2] + X[c, 2]) * uz) / 3.0 - plate + floor
                     # A |n.d| h = |cross . d| / 2 * h
                     e += -0.5 * proj * h
                     ra += 0.5 * dbl
@@ -81,7 +81,7 @@ def _kernel3(V, F, up, orient, tau, mask):
 
 
 @njit(cache=True, parallel=True)
-def _kernel2(V, E, up, orient, tau, mask):
+def _kernel2(V, E, up, orient, tau, mask, floor):
     """Energy and risky length per pose (2D).
 
     ``V`` (P, n, 2) float64 poses, ``E`` (e, 2) int64 boundary edges
@@ -111,7 +111,7 @@ def _kernel2(V, E, up, orient, tau, mask):
                 proj = orient[p] * (ty * ux - tx * uy)
                 if proj < -tau * ln:
                     risky = True
-                    h = 0.5 * ((X[a, 0] + X[b, 0]) * ux + (X[a, 1] + X[b, 1]) * uy) - plate
+                    h = 0.5 * ((X[a, 0] + X[b, 0]) * ux + (X[a, 1] + X[b, 1]) * uy) - plate + floor
                     e += -proj * h
                     rl += ln
             mask[p, k] = risky
@@ -120,7 +120,7 @@ def _kernel2(V, E, up, orient, tau, mask):
     return out
 
 
-def _numpy(V, F, u, orient, tau):
+def _numpy(V, F, u, orient, tau, floor=0.0):
     """Plain numpy version of the kernels, poses in chunks of bounded memory.
 
     Same arguments as :func:`_kernel3` (faces ``F``; boundary edges taken
@@ -141,14 +141,14 @@ def _numpy(V, F, u, orient, tau):
             n = np.cross(b - a, c - a)  # doubled area times unit normal
             size = np.linalg.norm(n, axis=-1)
             proj = o * (n @ u)
-            h = ((a + b + c) @ u) / 3.0 - plate
+            h = ((a + b + c) @ u) / 3.0 - plate + floor
             scale = 0.5
         else:
             a, b = X[:, E[:, 0]], X[:, E[:, 1]]
             t = b - a
             size = np.linalg.norm(t, axis=-1)
             proj = o * (t[..., 1] * u[0] - t[..., 0] * u[1])  # outward normal (ty, -tx)
-            h = 0.5 * ((a + b) @ u) - plate
+            h = 0.5 * ((a + b) @ u) - plate + floor
             scale = 1.0
         risky = (size > 0.0) & (proj < -tau * size)
         out[s:s + chunk, 0] = np.sum(np.where(risky, -scale * proj * h, 0.0), axis=1)
@@ -157,7 +157,7 @@ def _numpy(V, F, u, orient, tau):
     return out, mask
 
 
-def _compute(vertices, faces, up, overhang_angle, backend="fast"):
+def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0):
     """Check the arguments and run a backend.
 
     Returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask, single).
@@ -167,14 +167,14 @@ def _compute(vertices, faces, up, overhang_angle, backend="fast"):
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
     orient = orientation_sign(V, F, backend)
     if backend == "numpy":
-        out, mask = _numpy(V, F, u, orient, tau)
+        out, mask = _numpy(V, F, u, orient, tau, float(floor))
     elif V.shape[-1] == 3:
         mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
-        out = _kernel3(V, F, u, orient, tau, mask)
+        out = _kernel3(V, F, u, orient, tau, mask, float(floor))
     else:
         E = boundary_edges(F)
         mask = np.zeros((V.shape[0], E.shape[0]), np.bool_)
-        out = _kernel2(V, E, u, orient, tau, mask)
+        out = _kernel2(V, E, u, orient, tau, mask, float(floor))
     return out, mask, single
 
 
@@ -240,8 +240,8 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     return _out(out[:, 1], single)
 
 
-def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
-    """Prism overhang energy ``sum_f A_f |n_f . up| h_f`` over risky faces.
+def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", floor=0.0):
+    """Prism overhang energy ``sum_f A_f |n_f . up| (h_f + floor)`` over risky faces.
 
     Parameters
     ----------
@@ -260,6 +260,10 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     backend : {"fast", "numpy"}
         ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
         numpy reference (same result up to round-off).
+    floor : float
+        Added to every prism's height (length units): what a support costs
+        however low it is (its interface layers and base). 0 is the paper's
+        estimate.
 
     Returns
     -------
@@ -268,7 +272,7 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast"):
         (``s**2`` in 2D) under uniform scaling and is invariant under
         rotations about ``up`` and translations.
     """
-    out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
+    out, _, single = _compute(vertices, faces, up, overhang_angle, backend, floor)
     return _out(out[:, 0], single)
 
 
