@@ -93,7 +93,7 @@ def slicer_mm(rig, V: np.ndarray) -> tuple[float, float]:
     return report["before"]["support_mm"], report["after"]["support_mm"]
 
 
-def four_ways(name: str, slice_best: int) -> dict:
+def four_ways(name: str, slice_best: int, unseeded: bool = False) -> dict:
     """The four (five) measurements of one model."""
     rig = load_any(name)
     V, F, up = rig.vertices, rig.faces, rig.up
@@ -106,7 +106,9 @@ def four_ways(name: str, slice_best: int) -> dict:
     if not turned:
         row["rest"], _ = slicer_mm(rig, V)
     row["turning"] = min([row["rest"], *turned])
-    for key, changes in (("pose", {"orient": "keep"}), ("both", {}), ("both_unseeded", {"orient_seeds": 0})):
+    variants = [("pose", {"orient": "keep"}), ("both", {})] + ([("both_unseeded", {"orient_seeds": 0})]
+                                                               if unseeded else [])
+    for key, changes in variants:
         t0 = time.perf_counter()
         result = sl.optimize(rig, **changes)
         seconds = time.perf_counter() - t0
@@ -129,7 +131,8 @@ def table(rows: list[dict]) -> str:
              "| printing direction (4) | (4) stands / new contacts |",
              "|" + "---|" * 12]
     for r in rows:
-        p, b, u = r["pose"], r["both"], r["both_unseeded"]
+        p, b = r["pose"], r["both"]
+        u = r.get("both_unseeded") or {"mm": float("nan"), "seconds": float("nan")}
         best_other = min(r["turning"], p["mm"])
         lines.append(
             f"| {r['model']} | {r['rest']:.0f} | {r['turning']:.0f} ({_pct(r['rest'], r['turning'])}) "
@@ -149,12 +152,15 @@ def summary(rows: list[dict]) -> str:
     tol = 1.01  # PrusaSlicer's noise
     ok = sum(r["both"]["mm"] <= tol * min(r["turning"], r["pose"]["mm"]) + 1.0 for r in rows)
     beats_turning = sum(r["both"]["mm"] < r["turning"] for r in rows)
-    seeded_better = sum(r["both"]["mm"] <= r["both_unseeded"]["mm"] for r in rows)
+    seeded_better = sum(r["both"]["mm"] <= r["both_unseeded"]["mm"] for r in rows if "both_unseeded" in r)
     ratio = [r["both"]["seconds"] / r["pose"]["seconds"] for r in rows]
+    compared = [r for r in rows if "both_unseeded" in r]
+    unseeded = (f" (unseeded {np.mean([reduction(r['rest'], r['both_unseeded']['mm']) or 0.0 for r in compared]):.1f} "
+                f"% on {len(compared)})") if compared else ""
     return (f"Mean reduction against (1) over {len(rows)} models: turning only {mean_red('turning'):.1f} %, "
             f"pose only {mean_red('pose'):.1f} %, pose + orientation {mean_red('both'):.1f} % "
-            f"(unseeded {mean_red('both_unseeded'):.1f} %). (4) within 1 % of min((2), (3)) on {ok} of {len(rows)}; "
-            f"below (2) on {beats_turning}; seeded at least as good as unseeded on {seeded_better}. "
+            f"{unseeded}. (4) within 1 % of min((2), (3)) on {ok} of {len(rows)}; "
+            f"below (2) on {beats_turning}; seeded at least as good as unseeded on {seeded_better} of {len(compared)}. "
             f"Time (4) / (3): median {np.median(ratio):.2f}, largest {max(ratio):.2f}.")
 
 
@@ -162,6 +168,8 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="+", default=None)
     p.add_argument("--slice-best", type=int, default=4, help="Candidate directions sliced per model for (2).")
+    p.add_argument("--unseeded", action="store_true",
+                   help="Also search with orient_seeds=0 (no candidate directions) to compare the schemes.")
     p.add_argument("--out", default=None, help="Write the table as the '## Pose and orientation' section of FILE.")
     args = p.parse_args(argv)
     figures = [m for m in sl.DEMO_FIGURES if m != "woody2d"]
@@ -170,7 +178,7 @@ def main(argv=None):
     rows = []
     for name in models:
         t0 = time.perf_counter()
-        rows.append(four_ways(name, args.slice_best))
+        rows.append(four_ways(name, args.slice_best, args.unseeded))
         print(table(rows[-1:]).splitlines()[-1], f"({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
     text = "\n".join([
         HEADING,

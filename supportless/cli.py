@@ -169,7 +169,8 @@ def _run_search(rig, console, settings, quiet=False):
 
         def callback(it, info):
             t = info["terms"]
-            progress.update(task, completed=it, status=f"best {info['value']:.4f} = arap {t['arap']:.3f} "
+            progress.update(task, total=info["iterations"], completed=it,
+                            status=f"best {info['value']:.4f} = arap {t['arap']:.3f} "
                                                        f"· overhang {t['overhang']:.3f} "
                                                        f"· intersect {t['intersection']:.3f}")
 

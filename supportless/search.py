@@ -5,8 +5,8 @@ standard velocity update (inertia, cognitive and social terms, positions
 clamped to the bounds) as in libigl's ``igl::pso``, except that the whole swarm
 is evaluated in one batched call per iteration. :func:`optimize` searches the
 Euler angles of a rig's free bones with it (and, with ``orient="free"``, the
-print rotation: two more variables in 3D, one in 2D) and returns a
-:class:`PoseResult`.
+print rotation: two more variables in 3D, one in 2D, in a second swarm, see
+:data:`TURN_SHARE`) and returns a :class:`PoseResult`.
 """
 
 from __future__ import annotations
@@ -20,12 +20,18 @@ import numpy as np
 from .energies.exact import intersecting_face_pairs
 from .geometry import place_on_plate, print_pose
 from .objective import Objective
-from .orientation import rotations_from_params, seed_params
+from .orientation import orientation_params, rotations_from_params, seed_params
 from .rig import Rig
 from .settings import PSO_PRESETS, SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
-__all__ = ["PoseResult", "SwarmResult", "optimize", "particle_swarm"]
+__all__ = ["PoseResult", "SwarmResult", "TURN_SHARE", "optimize", "particle_swarm"]
+
+#: With ``orient="free"`` the search runs the pose-only swarm, then a swarm of
+#: ``particles // TURN_SHARE`` over pose and turn together, started from the
+#: best pose upright and at the candidate directions: about 1.3x the time of
+#: the pose-only search, never worse than it by the objective.
+TURN_SHARE = 3
 
 @dataclass
 class SwarmResult:
@@ -248,8 +254,8 @@ class _Timed:
 
 
 def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Objective | None = None,
-             start: np.ndarray | None = None, callback: Callable[[int, dict], bool | None] | None = None,
-             **changes) -> PoseResult:
+             start: np.ndarray | None = None, start_rotation: np.ndarray | None = None,
+             callback: Callable[[int, dict], bool | None] | None = None, **changes) -> PoseResult:
     """Find a pose of ``rig`` that needs less support, with a particle swarm.
 
     Parameters
@@ -265,6 +271,10 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         keep its angles, and it is one of the initial particles (with the
         free bones' rest rotations as another), so the result is never worse
         than the start pose.
+    start_rotation : (d, d) float64, optional
+        A print rotation to start from (with ``orient="free"``): the start
+        pose turned by it is one more initial particle, so a repeated search
+        is never worse than the pose and turn it starts from.
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
         (normalised terms of the best pose), ``angles``, ``rotation`` (the
@@ -287,61 +297,91 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     mirror = require_mirror(rig) if settings.symmetric else None
     layout = PoseLayout(rig, settings.fixed_bones(rig), base, np.radians(settings.joint_limits(rig)), mirror)
     fixed, k = layout.fixed, layout.count
-    turns = settings.orient == "free"
-    o = rig.dim - 1 if turns else 0       # orientation variables after the k pose variables
-
-    def to_angles(X):
-        return layout.to_angles(X[:, :k])
-
-    def to_rotations(X):
-        return rotations_from_params(X[:, k:], rig.up) if turns else None
-
-    def f(X, bound):
-        return objective.bounded(to_angles(X), bound, to_rotations(X))
-
     stats: dict = {}
     term_history = {"arap": [], "overhang": [], "intersection": []}
-    best_terms = _Timed(lambda x: objective.terms(to_angles(x[None]), to_rotations(x[None])), stats, "progress")
+    turning = settings.orient == "free"
+    # orient="free": the pose alone first (the whole swarm, as "keep"), then pose and turn together with
+    # half the swarm, started from the first phase's best pose upright and at the candidate directions
+    phases = ([False] if k else []) + ([True] if turning else [])
+    total = settings.iterations * max(1, len(phases))
 
-    def on_iteration(it, x, value):
-        terms = {key: float(v[0]) for key, v in best_terms(x).items()}
-        for key in term_history:
-            term_history[key].append(terms[key])
-        if callback is not None:
-            return callback(it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
-                                 "rotation": _rotation(x), "iterations": settings.iterations})
-        return None
+    def variables(turns):
+        o = rig.dim - 1 if turns else 0
 
-    def _rotation(x):
-        return np.eye(rig.dim) if not turns else to_rotations(x[None])[0]
+        def to_angles(X):
+            return layout.to_angles(X[:, :k])
+
+        def to_rotation(x):
+            return rotations_from_params(x[None, k:], rig.up)[0] if turns else np.eye(rig.dim)
+
+        return o, to_angles, to_rotation
 
     feasible = None
     if settings.exact_intersections and rig.dim == 3:
         def no_intersection(x):
-            return intersecting_face_pairs(rig.pose(to_angles(x[None])[0]), rig.faces) == 0
+            return intersecting_face_pairs(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces) == 0
 
         feasible = _Timed(no_intersection, stats, "exact")
 
-    initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), layout.from_angles(base)])
-    if turns:  # upright first, then the rest pose at the best candidate directions
-        seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle)
-        initial = np.vstack([np.hstack([initial, np.zeros((len(initial), o))]),
-                             np.hstack([np.zeros((len(seeds), k)), seeds])])
-    if k + o == 0:
-        swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
-    else:
+    def run_phase(turns, initial, particles, offset):
+        o, to_angles, to_rotation = variables(turns)
+
+        def f(X, bound):
+            R = rotations_from_params(X[:, k:], rig.up) if turns else None
+            return objective.bounded(to_angles(X), bound, R)
+
+        def terms_of(x):
+            return objective.terms(to_angles(x[None]), to_rotation(x)[None] if turns else None)
+
+        best_terms = _Timed(terms_of, stats, "progress")
+
+        def on_iteration(it, x, value):
+            terms = {key: float(v[0]) for key, v in best_terms(x).items()}
+            for key in term_history:
+                term_history[key].append(terms[key])
+            if callback is not None:
+                return callback(offset + it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
+                                              "rotation": to_rotation(x), "iterations": total})
+            return None
+
         lower = np.concatenate([layout.lower, np.full(o, -np.pi)])
         upper = np.concatenate([layout.upper, np.full(o, np.pi)])
-        swarm = particle_swarm(f, lower, upper, particles=settings.particles,
-                               iterations=settings.iterations, rng=np.random.default_rng(settings.seed),
-                               initial=initial, callback=on_iteration, feasible=feasible,
-                               pass_bound=True, **PSO_PRESETS[settings.preset])
+        return particle_swarm(f, lower, upper, particles=particles, iterations=settings.iterations,
+                              rng=np.random.default_rng(settings.seed), initial=initial, callback=on_iteration,
+                              feasible=feasible, pass_bound=True, **PSO_PRESETS[settings.preset])
+
+    initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), layout.from_angles(base)])
+    swarm, history, turned = None, [], False
+    for phase, turns in enumerate(phases):
+        if turns:
+            o = rig.dim - 1
+            seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle)
+            # the best pose so far first (upright, then at each candidate direction): the swarm keeps it, so
+            # this phase never ends worse than the last
+            poses = ([swarm.x] if swarm is not None else []) + [*initial]
+            starts = [np.concatenate([x, t]) for x in poses for t in np.vstack([np.zeros((1, o)), seeds])]
+            if start_rotation is not None:
+                starts.insert(0, np.concatenate([layout.from_angles(base), orientation_params(
+                    np.asarray(start_rotation, np.float64), rig.up)]))
+            initial = np.array(starts, np.float64)
+            particles = max(2, settings.particles // TURN_SHARE) if phase else settings.particles
+        else:
+            particles = settings.particles
+        swarm_now = run_phase(turns, initial, particles, phase * settings.iterations)
+        history += list(swarm_now.history if not history else swarm_now.history[1:])
+        swarm, turned = swarm_now, turns
+        if swarm.interrupted:
+            break
+    if swarm is None:  # nothing to move and nothing to turn
+        swarm = SwarmResult(np.zeros(0), float(objective(base[None])[0]), np.zeros(1), 1)
+        history = [swarm.value]
+    _, to_angles, to_rotation = variables(turned)
     angles = to_angles(swarm.x[None])[0]
-    rotation = _rotation(swarm.x)
+    rotation = to_rotation(swarm.x)
     posed = place_on_plate(rig.pose(angles), rig.up)
-    terms = {key: float(v) for key, v in objective.terms(angles, rotation if turns else None).items()}
-    return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=swarm.history,
+    terms = {key: float(v) for key, v in objective.terms(angles, rotation if turned else None).items()}
+    return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=np.asarray(history),
                       terms=terms, settings=settings, objective=objective, interrupted=swarm.interrupted,
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
                       stats=stats, rotation=rotation,
-                      print_vertices=print_pose(posed, rotation, rig.up) if turns else posed)
+                      print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)

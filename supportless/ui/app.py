@@ -12,7 +12,11 @@ How it stays responsive: the view is a skinned mesh, so an edit streams only
 the bone frames; edits only change the state and wake one render thread, which
 always draws the latest pose (a burst of slider events becomes one redraw),
 then measures it with the full weights and redraws the overlays. The search
-runs in its own thread and streams its best pose into the view.
+runs in its own thread and streams its best pose and print rotation into the view.
+
+The view shows the model standing (where the bones are edited) or as printed:
+turned by the state's print rotation onto the plate
+(:meth:`EditorState.frame_transform`), skeleton and risky faces in that frame.
 """
 
 from __future__ import annotations
@@ -25,11 +29,12 @@ from typing import Callable
 import numpy as np
 
 from ..errors import SupportlessError
+from ..orientation import rotation_axis_angle
 from ..settings import SearchSettings
 from .panel import Panel, measures_markdown
 from .ports import page_url, start_server
 from .scene import Scene
-from .state import EditorState
+from .state import FRAMES, EditorState
 
 __all__ = ["App", "run_app"]
 
@@ -62,6 +67,11 @@ class App:
     port : int
     measures : dict
         :meth:`EditorState.measure` of the last drawn pose.
+    shown_vertices : (n, d) float64 or None
+        The exactly posed surface last drawn, in the frame of the view
+        (standing, or as printed: ``print_pose(rig.pose(angles), R, up)``).
+    view : dict
+        ``frame`` (``"standing"`` or ``"print"``), ``show_risky``, ``weights``.
     latency_ms : dict
         ``mesh`` (input to bone frames sent), ``full`` (to energies and
         overlays drawn) and ``median_mesh`` of the last 50 edits, ms.
@@ -75,6 +85,7 @@ class App:
         self.state = EditorState(rig, settings, workdir)
         self.status = "ready"
         self.measures: dict = {}
+        self.shown_vertices: np.ndarray | None = None
         self.latency_ms: dict = {}
         self._latencies: list[float] = []
         self._cond = threading.Condition()
@@ -82,7 +93,7 @@ class App:
         self._input_time = time.perf_counter()
         self._stopping = False
         self._dragging = False
-        self._view = {"show_risky": True, "weights": False}
+        self.view = {"frame": "standing", "show_risky": True, "weights": False}
 
         self.server = start_server(host, port, f"supportless: {rig.name}", verbose)
         self.port = int(self.server.get_port())
@@ -111,9 +122,14 @@ class App:
         return True
 
     def reset(self) -> None:
-        """Back to the rest pose (undoable)."""
+        """Back to the rest pose, printed as it stands (undoable)."""
         self.state.reset()
         self._set_status("reset to the rest pose")
+
+    def print_upright(self) -> None:
+        """Drop the print rotation: print the pose as it stands (undoable)."""
+        self.state.set_rotation(np.eye(self.rig.dim))
+        self._set_status("printing the pose as it stands")
 
     def _attempt(self, failure: str, action: Callable, *args, done: Callable[[object], str]) -> bool:
         """Run a state action; its error becomes a message in the page, never an exception."""
@@ -200,11 +216,26 @@ class App:
             return False
 
     def set_view(self, show_risky: bool | None = None, weights: bool | None = None,
-                 opacity: float | None = None) -> None:
-        """View options: risky-face overlay, colouring by bone weights, mesh opacity."""
-        for key, value in (("show_risky", show_risky), ("weights", weights)):
+                 opacity: float | None = None, frame: str | None = None) -> None:
+        """View options: risky-face overlay, colouring by bone weights, mesh opacity, frame.
+
+        Parameters
+        ----------
+        frame : {"standing", "print"}, optional
+            Show the model standing or as printed (turned by the print rotation onto the plate).
+
+        Raises
+        ------
+        ValueError
+            For an unknown frame.
+        """
+        if frame is not None:
+            if frame not in FRAMES:
+                raise ValueError(f"frame must be one of {FRAMES}, not {frame!r}")
+            self.panel.show_view(frame)
+        for key, value in (("show_risky", show_risky), ("weights", weights), ("frame", frame)):
             if value is not None:
-                self._view[key] = value
+                self.view[key] = value
         if opacity is not None:
             self.scene.set_opacity(opacity)
         self._request_render()
@@ -245,7 +276,8 @@ class App:
         elif event == "search_started":
             s, p = state.search_settings, state.progress
             self.panel.search_started(s.iterations)
-            self._set_status(f"searching: {s.particles} particles × {s.iterations} iterations, "
+            turns = " and the print orientation" if s.orient == "free" else ""
+            self._set_status(f"searching{turns}: {s.particles} particles × {s.iterations} iterations, "
                              f"{p['free_bones']} free bones")
         elif event == "progress":
             self.panel.show_progress(state.progress)
@@ -256,8 +288,10 @@ class App:
                 self._error(f"the search failed: {error}")
             else:
                 word = "cancelled" if result.interrupted else "finished"
+                degrees = rotation_axis_angle(result.rotation)[1]
+                turn = f"printed turned {degrees:.0f}°" if abs(degrees) >= 0.05 else "printed as it stands"
                 self._set_status(f"search {word} after {result.runtime_seconds:.1f} s: objective "
-                                 f"{result.value:.4g}; keep editing, or Undo to go back")
+                                 f"{result.value:.4g}, {turn}; keep editing, or Undo to go back")
         self._request_render()
 
     def _set_status(self, text: str) -> None:
@@ -316,17 +350,22 @@ class App:
                 self._cond.notify_all()
 
     def _render(self, t_in: float) -> None:
-        state = self.state
-        angles, selected, fixed, settings = state.get_angles(), state.selected, state.fixed, state.settings
-        self.scene.draw_pose(angles, selected, fixed, move_gizmo=not self._dragging)
+        state, view = self.state, dict(self.view)
+        (angles, R), selected, fixed, settings = state.get_pose(), state.selected, state.fixed, state.settings
+        printed = view["frame"] == "print"
+        V = self.rig.pose(angles) if printed else None  # the plate placement needs the exact surface
+        Q, shift = state.frame_transform(view["frame"], V, R)
+        self.scene.draw_pose(angles, selected, fixed, move_gizmo=not self._dragging, placement=(Q, shift))
         t_mesh = time.perf_counter()
-        V = self.rig.pose(angles)
-        m = state.measure(angles, exact=True, vertices=V)
-        weights = self._view["weights"]
-        self.scene.draw_overlays(V, m["risky"] if self._view["show_risky"] and not weights else None,
+        V = self.rig.pose(angles) if V is None else V
+        m = state.measure(angles, rotation=R, exact=True, vertices=V)
+        shown = V @ Q.T + shift
+        weights = view["weights"]
+        risky = m["risky"] if printed else m["risky_standing"]
+        self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
                                  None if weights else m["intersecting_faces"], selected if weights else None)
         t_done = time.perf_counter()
-        self.measures = m
+        self.measures, self.shown_vertices = m, shown
         mesh_ms, full_ms = 1e3 * (t_mesh - t_in), 1e3 * (t_done - t_in)
         self._latencies = (self._latencies + [mesh_ms])[-50:]
         self.latency_ms = {"mesh": mesh_ms, "full": full_ms, "median_mesh": float(np.median(self._latencies))}

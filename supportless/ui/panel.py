@@ -11,17 +11,20 @@ from __future__ import annotations
 import numpy as np
 
 from ..objective import OVERHANG_MODELS
-from ..settings import SearchSettings
+from ..settings import ORIENT_MODES, SearchSettings
 from .scene import MESH_OPACITY
 
-__all__ = ["NUMBER_SETTINGS", "Panel", "measures_markdown"]
+__all__ = ["NUMBER_SETTINGS", "Panel", "VIEWS", "measures_markdown", "turn_text"]
+
+#: The view choices of the panel: label -> frame (:data:`supportless.ui.state.FRAMES`).
+VIEWS = {"standing": "standing", "as printed": "print"}
 
 #: The numeric search settings in the panel: field, label, widget limits.
 NUMBER_SETTINGS = (
     ("particles", "Particles", {"min": 2, "max": 5000, "step": 1}),
     ("iterations", "Iterations", {"min": 1, "max": 10000, "step": 1}),
     ("seed", "Seed", {"min": 0, "step": 1}),
-    ("joint_limit", "Joint limit °", {"min": 1.0, "max": 180.0, "step": 1.0}),
+    ("joint_limit", "Joint limit °", {"min": 0.0, "max": 180.0, "step": 1.0}),
     ("w_arap", "w ARAP", {"min": 0.0, "step": 0.1}),
     ("w_overhang", "w overhang", {"min": 0.0, "step": 0.1}),
     ("w_intersect", "w intersect", {"min": 0.0, "step": 1.0}),
@@ -38,6 +41,20 @@ def _vs_rest(x: float | None) -> str:
     if x is None:
         return "rest pose needs none"
     return f"{x:.1f} % less than rest" if x >= 0 else f"{-x:.1f} % more than rest"
+
+
+def _vector(v) -> str:
+    return "(" + ", ".join(f"{x:.2f}" for x in np.asarray(v, np.float64) + 0.0) + ")"
+
+
+def turn_text(m: dict) -> str:
+    """How the pose is printed, from :meth:`~supportless.ui.state.EditorState.measure`'s
+    ``turn_deg``, ``turn_axis`` ((3,) or None in 2D) and ``print_direction`` ((d,))."""
+    if abs(m["turn_deg"]) < 0.05:
+        return "as it stands (not turned)"
+    about = "counter-clockwise" if m["turn_axis"] is None else f"about {_vector(m['turn_axis'])}"
+    return (f"turned {m['turn_deg']:.1f}° {about}; the model's {_vector(m['print_direction'])} "
+            f"printed upward")
 
 
 def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int) -> str:
@@ -59,8 +76,14 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
     inter_txt = ("not checked (2D)" if dim == 2 else "n/a" if inter is None
                  else f"{len(inter)} faces" + (" (magenta)" if len(inter) else ""))
     red = m.get("reduction", {})
+    turned = abs(m["turn_deg"]) >= 0.05
+    up = m["upright"]
+    standing = ([f"- Standing (not turned): support (prism) {_fmt(up['support_prism'])} · (column) "
+                 f"{_fmt(up['support_column'])} · {int(np.sum(m['risky_standing']))} risky faces"]
+                if turned else [])
     return "\n".join([
         f"- Objective: **{_fmt(m['objective'])}** (what Optimize minimises)",
+        f"- Printed: {turn_text(m)}" + ("; support counted as printed" if turned else ""),
         f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g})",
         f"- Overhang term: {_fmt(t['overhang'])} (× {settings.w_overhang:g}, faces past "
         f"{settings.search_overhang_angle:g}°)",
@@ -69,6 +92,7 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         f"- Support (column): {_fmt(m['support_column'])} ({_vs_rest(red.get('support_column'))})",
         f"- Risky faces (past {m['overhang_angle']:g}°): {int(np.sum(m['risky']))} · "
         f"self-intersecting: {inter_txt}",
+        *standing,
         f"- Update time: mesh {latency.get('mesh', 0):.1f} ms · with energies {latency.get('full', 0):.1f} ms",
     ])
 
@@ -91,6 +115,8 @@ class Panel:
     status, measures, bone_info, fixed_info, search_info : viser markdown handles
     sliders : list of viser slider handles
         X, Y, Z angle of the selected bone, degrees.
+    view : viser dropdown handle
+        Show the model standing or as printed (a label of :data:`VIEWS`).
     """
 
     def __init__(self, gui, app):
@@ -122,6 +148,11 @@ class Panel:
             g.add_button("Undo").on_click(lambda _e: app.undo())
             g.add_button("Redo").on_click(lambda _e: app.redo())
             g.add_button("Reset to rest pose").on_click(lambda _e: app.reset())
+            g.add_button("Print as it stands", hint="Drop the print rotation (keep the pose)").on_click(
+                lambda _e: app.print_upright())
+            self.view = g.add_dropdown("View", tuple(VIEWS), initial_value="standing",
+                                       hint="standing: as the model stands (the bones are edited here); "
+                                            "as printed: turned by the print rotation onto the plate")
             show_risky = g.add_checkbox("Show risky faces", True)
             weights = g.add_checkbox("Colour by bone weights", False,
                                      hint="Colour the mesh by the selected bone's skinning weights")
@@ -132,6 +163,11 @@ class Panel:
         def _(event):
             if event.client is not None:
                 app.state.select_bone(self.names.index(self.bone.value))
+
+        @self.view.on_update
+        def _(event):
+            if event.client is not None:
+                app.set_view(frame=VIEWS[self.view.value])
 
         show_risky.on_update(lambda _e: app.set_view(show_risky=bool(show_risky.value)))
         weights.on_update(lambda _e: app.set_view(weights=bool(weights.value)))
@@ -151,6 +187,9 @@ class Panel:
             self.settings["overhang_model"] = g.add_dropdown(
                 "Support model", OVERHANG_MODELS, initial_value=settings.overhang_model,
                 hint="prism: the paper's estimate; column: columns down to the plate")
+            self.settings["orient"] = g.add_dropdown(
+                "Orientation", ORIENT_MODES, initial_value=settings.orient,
+                hint="free: search the print orientation with the pose; keep: print as the model stands")
             self.settings["fix"] = g.add_text("Fix bones", ",".join(settings.fix),
                                               hint="1-based bone numbers, e.g. 1,4 or 'all'")
             self.settings["free"] = g.add_text("Free bones", ",".join(settings.free),
@@ -182,7 +221,8 @@ class Panel:
             save, load = g.add_button("Save pose"), g.add_button("Load pose")
             upload = g.add_upload_button("Upload pose…", mime_type="application/json")
             dl_pose = g.add_button("Download pose JSON")
-            mesh_path = g.add_text("Mesh file", f"{name}-posed.stl", hint="On the server; .stl .3mf .obj .ply")
+            mesh_path = g.add_text("Mesh file", f"{name}-posed.stl",
+                                   hint="On the server; .stl .3mf .obj .ply; written as printed, on the plate")
             export = g.add_button("Export mesh to file")
             dl_stl, dl_3mf = g.add_button("Download STL"), g.add_button("Download 3MF")
         save.on_click(lambda _e: app.save_pose(pose_path.value))
@@ -197,6 +237,12 @@ class Panel:
     def show_status(self, text: str, error: bool = False) -> None:
         """The status line (an error stands out)."""
         self.status.content = f"**⚠ Error:** {text}" if error else f"**Status:** {text}"
+
+    def show_view(self, frame: str) -> None:
+        """Show which frame the model is drawn in (``standing`` or ``print``)."""
+        label = next(k for k, v in VIEWS.items() if v == frame)
+        if self.view.value != label:
+            self.view.value = label
 
     def show_measures(self, markdown: str) -> None:
         """The energies list (see :func:`measures_markdown`)."""
@@ -245,11 +291,13 @@ class Panel:
                 h.value = value
         fixed_list = ", ".join(str(b + 1) for b in np.flatnonzero(fixed)) or "none"
         notes = "".join(f"\n\n⚠ {message}" for message in self.invalid.values())
+        orient = (", and turns the model to print it with less (Orientation: free)" if settings.orient == "free"
+                  else "; the model is printed as it stands (Orientation: keep)")
         self.fixed_info.content = (f"Fixed in the search (grey): bones {fixed_list}. Default: the bones on the "
                                    "plate and the bones joining them; the rest of the body turns about "
                                    f"them. The search counts faces past "
                                    f"{settings.search_overhang_angle:g}° (threshold + margin) as needing "
-                                   f"support.{notes}")
+                                   f"support{orient}.{notes}")
 
     def search_started(self, total: int) -> None:
         """Disable Optimize, enable Cancel, empty the progress bar."""

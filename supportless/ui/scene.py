@@ -5,6 +5,11 @@ nothing of energies or of the editing state. The surface is a viser *skinned*
 mesh, so a new pose sends only the bone frames (a few hundred bytes) and the
 browser skins with the top four weights per vertex. Risky faces and
 intersecting faces are drawn as overlays of the exactly posed surface.
+
+A pose can be drawn standing or placed elsewhere, e.g. as printed: a
+*placement* ``(Q, shift)`` turns the whole model, ``shown = V @ Q.T + shift``
+(bone frames, joints, bones and gizmo alike); the gizmo still reports
+rotations in the standing frame.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import numpy as np
 
 from ..energies.surface import boundary_edges
 
-__all__ = ["Scene", "matrix_from_quat", "quat_from_matrix", "to3", "transforms3"]
+__all__ = ["Scene", "matrix_from_quat", "placement3", "quat_from_matrix", "to3", "transforms3"]
 
 # colours (RGB 0-255)
 MESH_COLOR = (170, 190, 215)
@@ -57,6 +62,29 @@ def transforms3(T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     A = np.tile(np.eye(3), T.shape[:-2] + (1, 1))
     A[..., :2, :2] = T[..., :2]
     return A, to3(T[..., 2])
+
+
+def placement3(placement) -> tuple[np.ndarray, np.ndarray]:
+    """A placement in 3D.
+
+    Parameters
+    ----------
+    placement : tuple of ((d, d) float64, (d,) float64) or None
+        ``(Q, shift)``: ``shown = V @ Q.T + shift``; None leaves the model as it is.
+
+    Returns
+    -------
+    Q3 : (3, 3) float64
+        ``Q`` in the upper-left block (a planar turn is about z).
+    shift3 : (3,) float64
+    """
+    if placement is None:
+        return np.eye(3), np.zeros(3)
+    Q, shift = (np.asarray(a, np.float64) for a in placement)
+    d = Q.shape[0]
+    Q3 = np.eye(3)
+    Q3[:d, :d] = Q
+    return Q3, to3(shift)
 
 
 def quat_from_matrix(R: np.ndarray) -> np.ndarray:
@@ -138,7 +166,8 @@ class Scene:
     on_gizmo : callable
         ``on_gizmo(phase, rotation)`` while the rotation gizmo is dragged:
         ``phase`` is ``"start"``, ``"update"`` or ``"end"``, ``rotation``
-        (3, 3) float64 its orientation in the world.
+        (3, 3) float64 its orientation in the world of the standing model
+        (the placement the pose is drawn with taken back).
     """
 
     def __init__(self, server, rig, on_joint_click: Callable[[int], None],
@@ -155,6 +184,7 @@ class Scene:
         self._centre_plate = centre - (centre @ self.up) * self.up
         self.h_weights = None
         self.h_risky_edges = None
+        self._turn = np.eye(3)  # the placement's rotation the pose is drawn with
         self._overlays: dict = {}
         s = server.scene
         self._add_plate(s, float((rest @ self.up).min()))
@@ -207,7 +237,7 @@ class Scene:
         @self.h_gizmo.on_update
         async def _(event):  # async: the phases arrive in order
             phase = event.phase if event.phase in ("start", "end") else "update"
-            on_gizmo(phase, matrix_from_quat(event.target.wxyz))
+            on_gizmo(phase, self._turn.T @ matrix_from_quat(event.target.wxyz))
 
     def _place_camera(self, centre: np.ndarray) -> None:
         up = self.up
@@ -222,7 +252,8 @@ class Scene:
         """Mesh opacity in (0, 1]; 1 draws it opaque."""
         self.h_mesh.opacity = opacity if opacity < 0.999 else None
 
-    def draw_pose(self, angles: np.ndarray, selected: int, fixed: np.ndarray, move_gizmo: bool = True) -> None:
+    def draw_pose(self, angles: np.ndarray, selected: int, fixed: np.ndarray, move_gizmo: bool = True,
+                  placement=None) -> None:
         """Send the bone frames, joints and bones of a pose (sent at once, then flushed).
 
         Parameters
@@ -234,11 +265,18 @@ class Scene:
             Bones drawn grey (fixed in the search); the others blue.
         move_gizmo : bool
             False while the gizmo is being dragged.
+        placement : tuple of ((d, d) float64, (d,) float64), optional
+            ``(Q, shift)``: draw the pose turned by ``Q`` and moved by
+            ``shift`` (``shown = V @ Q.T + shift``), e.g. as printed; None
+            draws it standing.
         """
         rig = self.rig
+        P, s = placement3(placement)
         Q, t = transforms3(rig.transforms(angles))
-        pos = np.einsum("bij,bj->bi", Q, self.roots) + t
-        J = to3(rig.posed_joints(angles))
+        pos = (np.einsum("bij,bj->bi", Q, self.roots) + t) @ P.T + s
+        Q = np.einsum("ij,bjk->bik", P, Q)
+        J = to3(rig.posed_joints(angles)) @ P.T + s
+        self._turn = P
         colors = np.where(fixed[:, None], np.uint8(BONE_FIXED_COLOR), np.uint8(BONE_FREE_COLOR)).astype(np.uint8)
         colors[selected] = BONE_SELECTED_COLOR
         with self.server.atomic():
@@ -261,7 +299,7 @@ class Scene:
         Parameters
         ----------
         vertices : (n, d) float64
-            The exactly posed surface.
+            The exactly posed surface, placed as :meth:`draw_pose` placed the pose.
         risky : (f,) bool or None
             Faces (boundary edges in 2D) needing support; None hides them.
         intersecting : (k,) int64 or None

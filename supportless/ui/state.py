@@ -1,7 +1,7 @@
 """The viewer's editing state, without a browser or a server.
 
-:class:`EditorState` holds what the page edits and shows: the current pose,
-the selected bone, undo/redo, the search settings (one
+:class:`EditorState` holds what the page edits and shows: the current pose
+and print rotation, the selected bone, undo/redo, the search settings (one
 :class:`~supportless.settings.SearchSettings`), the objective they define, the
 measures of a pose, pose and mesh files, and the pose search running in the
 background. The web app (:mod:`supportless.ui.app`) draws it and forwards the
@@ -9,11 +9,19 @@ page's events to it; tests drive it directly.
 
 Actions raise on bad input (:class:`~supportless.errors.SupportlessError`,
 ``OSError``, ``ValueError``) and leave the state as it was; the app turns the
-exception into a message in the page. Every change is announced to the
+exception into a message in the page.
+
+Two frames (see :mod:`supportless.orientation`): the pose *standing* as the
+input stood (the display frame, where the bones are edited) and the pose *as
+printed*, turned by the print rotation R the search chose and put on the
+plate (:func:`supportless.geometry.print_pose`). The support figures are
+counted as printed; contact, balance and distortion are judged standing.
+
+Every change is announced to the
 listeners given to :meth:`EditorState.subscribe` as ``listener(event, **info)``:
 
 ``"pose"``
-    The angles changed (``origin``: who changed them, e.g. ``"slider"``,
+    The angles or the print rotation changed (``origin``: who changed them, e.g. ``"slider"``,
     ``"gizmo"``, ``"search"``, or None).
 ``"selection"``
     Another bone is selected.
@@ -41,20 +49,38 @@ import numpy as np
 from .. import io as sio
 from ..energies.exact import intersecting_faces
 from ..energies.overhang import risky_faces
-from ..geometry import place_on_plate
+from ..geometry import place_on_plate, print_pose, print_transform
 from ..kinematics import matrix_to_euler
 from ..objective import Objective
+from ..orientation import print_direction, rotation_axis_angle
 from ..report import pose_measures, reduction
 from ..search import PoseResult, optimize
 from ..settings import SearchSettings
 from .history import PoseHistory
 
-__all__ = ["EditorState", "REDUCED_MEASURES"]
+__all__ = ["EditorState", "FRAMES", "REDUCED_MEASURES"]
 
 logger = logging.getLogger("supportless.ui")
 
 #: Measures compared with the rest pose (``measures["reduction"]``, percent).
 REDUCED_MEASURES = ("support_prism", "support_column", "risky_area")
+
+#: The frames a pose is shown or written in: standing as the input stood, or as printed.
+FRAMES = ("standing", "print")
+
+
+def _check_rotation(rotation, dim: int) -> np.ndarray:
+    """``rotation`` as a (dim, dim) float64 rotation matrix; ValueError otherwise."""
+    R = np.array(rotation, np.float64)
+    if R.shape != (dim, dim) or not np.allclose(R @ R.T, np.eye(dim), atol=1e-6) or np.linalg.det(R) < 0:
+        raise ValueError(f"the print rotation must be a {dim}x{dim} rotation matrix")
+    return R
+
+
+def _check_frame(frame: str) -> str:
+    if frame not in FRAMES:
+        raise ValueError(f"frame must be one of {FRAMES}, not {frame!r}")
+    return frame
 
 
 def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
@@ -66,7 +92,11 @@ def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
 
 
 class EditorState:
-    """The pose being edited, its measures and its search, for one rig.
+    """The pose being edited, its print rotation, its measures and its search, for one rig.
+
+    The print rotation R (the identity at the start and after
+    :meth:`reset`) is what the last search chose, or what a loaded pose file
+    held; editing bones keeps it.
 
     Parameters
     ----------
@@ -81,7 +111,7 @@ class EditorState:
     rig : supportless.rig.Rig
     workdir : pathlib.Path
     history : PoseHistory
-        Undo and redo steps.
+        Undo and redo steps, each ``(angles, rotation)``.
     settings : SearchSettings
         What the Optimize button searches with.
     objective : Objective
@@ -90,7 +120,7 @@ class EditorState:
     fixed : (m,) bool
         Bones the search keeps (``settings.fixed_bones(rig)``).
     rest_measures : dict
-        :meth:`measure` of the rest pose (without the exact test).
+        :meth:`measure` of the rest pose standing (without the exact test).
     progress : dict
         Of the last search: ``iteration``, ``iterations``, ``value`` (best
         objective), ``running``, ``cancelled``, ``free_bones``.
@@ -107,6 +137,7 @@ class EditorState:
         self._lock = threading.RLock()
         self._settings_lock = threading.Lock()
         self._angles = rig.rest_angles()
+        self._rotation = np.eye(rig.dim)
         self._selected = 0
         self._listeners: list[Callable] = []
         self.settings = settings if settings is not None else SearchSettings()
@@ -140,18 +171,45 @@ class EditorState:
         with self._lock:
             return self._angles.copy()
 
+    def get_rotation(self) -> np.ndarray:
+        """A copy of the current print rotation R (the identity until a search turns the model).
+
+        Returns
+        -------
+        rotation : (d, d) float64
+            The pose is printed as ``vertices @ R.T``, then put on the plate.
+        """
+        with self._lock:
+            return self._rotation.copy()
+
+    def get_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The current pose and print rotation, read together (copies).
+
+        Returns
+        -------
+        angles : (m, 3) float64
+            Radians.
+        rotation : (d, d) float64
+            The print rotation R.
+        """
+        with self._lock:
+            return self._angles.copy(), self._rotation.copy()
+
     @property
     def selected(self) -> int:
         """The bone the sliders and the gizmo act on (0-based)."""
         return self._selected
 
-    def set_angles(self, angles, *, record: bool = True, key=None, origin: str | None = None) -> None:
-        """Replace the whole pose.
+    def set_angles(self, angles, *, rotation=None, record: bool = True, key=None,
+                   origin: str | None = None) -> None:
+        """Replace the whole pose (the print rotation stays unless given).
 
         Parameters
         ----------
         angles : (m, 3) float64
             Radians.
+        rotation : (d, d) float64, optional
+            A new print rotation R (default: keep the current one).
         record : bool
             Make it an undo step.
         key : hashable, optional
@@ -163,16 +221,31 @@ class EditorState:
         Raises
         ------
         ValueError
-            When ``angles`` is not one triple per bone.
+            When ``angles`` is not one triple per bone, or ``rotation`` not a
+            rotation of the rig's dimension.
         """
         angles = np.array(angles, np.float64)
         if angles.shape != self._angles.shape:
             raise ValueError(f"pose has shape {angles.shape}, the rig needs {self._angles.shape}")
+        R = None if rotation is None else _check_rotation(rotation, self.rig.dim)
         with self._lock:
             if record:
-                self.history.record(self._angles, key)
+                self.history.record((self._angles, self._rotation), key)
             self._angles = angles
+            if R is not None:
+                self._rotation = R
         self._notify("pose", origin=origin)
+
+    def set_rotation(self, rotation, *, record: bool = True, origin: str | None = None) -> None:
+        """Replace the print rotation R, keeping the angles (see :meth:`set_angles`).
+
+        Parameters
+        ----------
+        rotation : (d, d) float64
+        """
+        with self._lock:
+            angles = self._angles.copy()
+        self.set_angles(angles, rotation=rotation, record=record, origin=origin)
 
     def set_bone_angles(self, bone: int, degrees, *, key=None, origin: str | None = None) -> None:
         """Set one bone's Euler angles.
@@ -228,14 +301,14 @@ class EditorState:
     def checkpoint(self) -> None:
         """Make the current pose an undo step (a drag calls it once, when it starts)."""
         with self._lock:
-            self.history.record(self._angles)
+            self.history.record((self._angles, self._rotation))
 
-    def _step(self, go: Callable[[np.ndarray], np.ndarray | None]) -> bool:
+    def _step(self, go: Callable[[tuple], tuple | None]) -> bool:
         with self._lock:
-            pose = go(self._angles)
+            pose = go((self._angles, self._rotation))
             if pose is None:
                 return False
-            self._angles = pose
+            self._angles, self._rotation = pose
         self._notify("pose", origin=None)
         return True
 
@@ -248,8 +321,8 @@ class EditorState:
         return self._step(self.history.redo)
 
     def reset(self) -> None:
-        """Back to the rest pose (undoable)."""
-        self.set_angles(self.rig.rest_angles())
+        """Back to the rest pose, printed as it stands (R = identity; undoable)."""
+        self.set_angles(self.rig.rest_angles(), rotation=np.eye(self.rig.dim))
 
     # ---------------------------------------------------------------- files
     def resolve_path(self, path) -> Path:
@@ -258,7 +331,7 @@ class EditorState:
         return p if p.is_absolute() else self.workdir / p
 
     def save_pose(self, path) -> Path:
-        """Write the current pose as a pose JSON file (with its objective and the settings).
+        """Write the current pose and print rotation as a pose JSON file (with its objective and the settings).
 
         Returns
         -------
@@ -266,13 +339,15 @@ class EditorState:
             Where it was written.
         """
         p = self.resolve_path(path)
-        angles = self.get_angles()
-        extra = {"objective": float(self.objective(angles)), "settings": self.settings.to_dict()}
-        sio.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra)
+        angles, R = self.get_pose()
+        extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict()}
+        sio.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R)
         return p
 
     def load_pose(self, path) -> Path:
-        """Make a pose file written for this skeleton the current pose (undoable).
+        """Make a pose file written for this skeleton the current pose and print rotation (undoable).
+
+        A file without a print rotation is printed as it stands (R = identity).
 
         Returns
         -------
@@ -282,10 +357,12 @@ class EditorState:
         Raises
         ------
         SupportlessError
-            For a missing file, one that is not a pose, or a pose of another skeleton.
+            For a missing file, one that is not a pose, a pose of another
+            skeleton, or a ``print_rotation`` that is not a rotation.
         """
         p = self.resolve_path(path)
-        self.set_angles(sio.read_pose(p, self.rig.bones))
+        angles = sio.read_pose(p, self.rig.bones)
+        self.set_angles(angles, rotation=sio.read_print_rotation(p, self.rig.dim))
         return p
 
     def load_pose_bytes(self, name: str, content: bytes) -> None:
@@ -296,12 +373,13 @@ class EditorState:
             self.load_pose(p)
 
     def pose_bytes(self) -> bytes:
-        """The current pose as a pose JSON file's bytes."""
-        angles = self.get_angles()
-        return _file_bytes("pose.json", lambda p: sio.write_pose(p, angles, self.rig.bones, self.rig.joints))
+        """The current pose and print rotation as a pose JSON file's bytes."""
+        angles, R = self.get_pose()
+        return _file_bytes("pose.json", lambda p: sio.write_pose(p, angles, self.rig.bones, self.rig.joints,
+                                                                 rotation=R))
 
     def posed_on_plate(self) -> np.ndarray:
-        """The current posed surface, its lowest point on the plate.
+        """The current posed surface standing, its lowest point on the plate.
 
         Returns
         -------
@@ -309,8 +387,58 @@ class EditorState:
         """
         return place_on_plate(self.rig.pose(self.get_angles()), self.rig.up)
 
-    def export_mesh(self, path) -> Path:
-        """Write the posed mesh (on the plate) as STL, 3MF, OBJ or PLY, by the extension.
+    def frame_transform(self, frame: str, vertices: np.ndarray | None = None,
+                        rotation: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """How a standing surface is shown or written in a frame: ``shown = vertices @ Q.T + shift``.
+
+        Parameters
+        ----------
+        frame : {"standing", "print"}
+            ``standing``: as it is (Q = identity, no shift); ``print``: turned by
+            the print rotation about its bounding-box centre, lowest point on
+            the plate (:func:`supportless.geometry.print_transform`).
+        vertices : (n, d) float64, optional
+            The standing posed surface (default: that of the current pose).
+        rotation : (d, d) float64, optional
+            The print rotation (default: the current one).
+
+        Returns
+        -------
+        Q : (d, d) float64
+        shift : (d,) float64
+            Apply them to the skeleton's joints too.
+        """
+        d = self.rig.dim
+        if _check_frame(frame) == "standing":
+            return np.eye(d), np.zeros(d)
+        angles, R = self.get_pose()
+        R = R if rotation is None else _check_rotation(rotation, d)
+        V = self.rig.pose(angles) if vertices is None else np.asarray(vertices, np.float64)
+        return R, print_transform(V, R, self.rig.up)
+
+    def printed_on_plate(self) -> np.ndarray:
+        """The current posed surface as printed: turned by R, its lowest point on the plate.
+
+        Returns
+        -------
+        vertices : (n, d) float64
+            ``print_pose(rig.pose(angles), R, up)``: the mesh to slice.
+        """
+        angles, R = self.get_pose()
+        return print_pose(self.rig.pose(angles), R, self.rig.up)
+
+    def _frame_vertices(self, frame: str) -> np.ndarray:
+        return self.printed_on_plate() if _check_frame(frame) == "print" else self.posed_on_plate()
+
+    def export_mesh(self, path, frame: str = "print") -> Path:
+        """Write the posed mesh as STL, 3MF, OBJ or PLY, by the extension.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+        frame : {"print", "standing"}
+            As printed (default, :meth:`printed_on_plate`: what to slice) or
+            standing (:meth:`posed_on_plate`); on the plate either way.
 
         Returns
         -------
@@ -318,12 +446,12 @@ class EditorState:
             Where it was written.
         """
         p = self.resolve_path(path)
-        sio.write_mesh(p, self.posed_on_plate(), self.rig.faces)
+        sio.write_mesh(p, self._frame_vertices(frame), self.rig.faces)
         return p
 
-    def mesh_bytes(self, fmt: str) -> bytes:
-        """The posed mesh (on the plate) as a file's bytes, ``fmt`` in stl/3mf/obj/ply."""
-        V = self.posed_on_plate()
+    def mesh_bytes(self, fmt: str, frame: str = "print") -> bytes:
+        """The posed mesh (on the plate, by default as printed) as a file's bytes, ``fmt`` in stl/3mf/obj/ply."""
+        V = self._frame_vertices(frame)
         return _file_bytes(f"mesh.{fmt}", lambda p: sio.write_mesh(p, V, self.rig.faces))
 
     # ---------------------------------------------------- settings, measures
@@ -367,41 +495,63 @@ class EditorState:
         self._notify("settings")
         return new
 
-    def measure(self, angles: np.ndarray | None = None, *, exact: bool = True,
-                vertices: np.ndarray | None = None) -> dict:
-        """Everything the panel shows about a pose, for the current settings.
+    def measure(self, angles: np.ndarray | None = None, *, rotation: np.ndarray | None = None,
+                exact: bool = True, vertices: np.ndarray | None = None) -> dict:
+        """Everything the panel shows about a pose and its print rotation, for the current settings.
 
         Parameters
         ----------
         angles : (m, 3) float64, optional
             Radians (default: the current pose).
+        rotation : (d, d) float64, optional
+            The print rotation R (default: the current one).
         exact : bool
             Also find the intersecting triangles (CGAL, 3D only).
         vertices : (n, d) float64, optional
-            ``rig.pose(angles)`` when the caller has it.
+            ``rig.pose(angles)`` (standing) when the caller has it.
 
         Returns
         -------
         measures : dict
             :func:`supportless.report.pose_measures` of :attr:`objective` at
-            the printer's threshold ``settings.overhang_angle``, plus
+            the printer's threshold ``settings.overhang_angle`` with
+            ``rotation=R``: the objective and the support figures as
+            printed, ``upright`` the support figures standing. Plus
             ``risky`` ((f,) bool in 3D, one per boundary edge in 2D: needs
-            support), ``intersecting_faces`` ((k,) int64 faces in an
-            intersecting pair, or None when not checked) and ``reduction``
-            (percent less than the rest pose of each of
-            :data:`REDUCED_MEASURES`, None where the rest pose needs none).
+            support as printed), ``risky_standing`` (the same, standing),
+            ``intersecting_faces`` ((k,) int64 faces in an intersecting
+            pair, or None when not checked), ``reduction`` (percent less
+            than the rest pose standing of each of :data:`REDUCED_MEASURES`,
+            None where the rest pose needs none), ``rotation`` ((d, d) R),
+            ``turn_deg`` (its angle, degrees), ``turn_axis`` ((3,) unit
+            axis, None in 2D) and ``print_direction`` ((d,) the model's
+            standing direction printed upward, ``R.T @ up``).
         """
         with self._lock:
             objective, settings, rest = self.objective, self.settings, self.rest_measures
-        angles = self.get_angles() if angles is None else angles
-        return self._measure(objective, settings, angles, exact=exact, vertices=vertices, rest=rest)
+            current_angles, current_R = self._angles.copy(), self._rotation.copy()
+        angles = current_angles if angles is None else angles
+        R = current_R if rotation is None else _check_rotation(rotation, self.rig.dim)
+        return self._measure(objective, settings, angles, R, exact=exact, vertices=vertices, rest=rest)
 
-    def _measure(self, objective: Objective, settings: SearchSettings, angles: np.ndarray, *, exact: bool,
-                 vertices: np.ndarray | None = None, rest: dict | None = None) -> dict:
+    def _measure(self, objective: Objective, settings: SearchSettings, angles: np.ndarray,
+                 rotation: np.ndarray | None = None, *, exact: bool, vertices: np.ndarray | None = None,
+                 rest: dict | None = None) -> dict:
         rig = self.rig
         V = rig.pose(angles) if vertices is None else vertices
-        out = pose_measures(objective, angles, exact=False, overhang_angle=settings.overhang_angle, vertices=V)
-        out["risky"] = np.asarray(risky_faces(V, rig.faces, rig.up, settings.overhang_angle), bool)
+        R = np.eye(rig.dim) if rotation is None else np.asarray(rotation, np.float64)
+        turned = not np.array_equal(R, np.eye(rig.dim))  # the identity: measure once, standing = printed
+        angle = settings.overhang_angle
+        out = pose_measures(objective, angles, exact=False, overhang_angle=angle, vertices=V,
+                            rotation=R if turned else None)
+        standing = np.asarray(risky_faces(V, rig.faces, rig.up, angle), bool)
+        out["risky_standing"] = standing
+        out["risky"] = np.asarray(risky_faces(V @ R.T, rig.faces, rig.up, angle), bool) if turned else standing
+        if not turned:
+            out["upright"] = {k: out[k] for k in REDUCED_MEASURES}
+        axis, degrees = rotation_axis_angle(R)
+        out |= {"rotation": R.copy(), "turn_deg": degrees, "turn_axis": axis,
+                "print_direction": print_direction(R, rig.up)}
         out["intersecting_faces"] = None
         if exact and rig.dim == 3:
             pairs = intersecting_faces(V, rig.faces)
@@ -421,9 +571,13 @@ class EditorState:
     def start_optimize(self, **overrides) -> bool:
         """Run :func:`supportless.search.optimize` from the current pose in a background thread.
 
-        The search streams its best pose into the state (``"pose"`` events with
-        ``origin="search"``) and ends with the best pose it found, which
-        one undo takes back to the pose it started from.
+        The search streams its best pose and print rotation into the state
+        (``"pose"`` events with ``origin="search"``) and ends with the best it
+        found (``result.angles`` and ``result.rotation``; with
+        ``orient="keep"`` the rotation is the identity), which one undo takes
+        back to the pose and rotation it started from. With ``orient="free"``
+        (the default) the search turns the model too, starting from the
+        model as it stands.
 
         Parameters
         ----------
@@ -439,39 +593,46 @@ class EditorState:
         Raises
         ------
         ValueError
-            For invalid settings, or when every bone is fixed.
+            For invalid settings, or when every bone is fixed and the search
+            may not turn the model (``orient="keep"``).
         """
         if self.optimizing:
             return False
         settings = self.settings.replace(**overrides)
         fixed = settings.fixed_bones(self.rig)
-        if fixed.all():
-            raise ValueError("every bone is fixed: free some bones (e.g. Free bones: all)")
+        if fixed.all() and settings.orient == "keep":
+            raise ValueError("every bone is fixed: free some bones (e.g. Free bones: all), "
+                             "or let the search turn the model (Orientation: free)")
         objective = self._objective_for(settings)
         self._cancel.clear()
         with self._lock:
-            self.history.record(self._angles)
+            self.history.record((self._angles, self._rotation))
             start = self._angles.copy()
+            start_rotation = self._rotation.copy()
             self.progress = {"iteration": 0, "iterations": settings.iterations, "value": None,
                              "running": True, "cancelled": False, "free_bones": int((~fixed).sum())}
         self.search_settings = settings
-        self._search = threading.Thread(target=self._run_search, args=(settings, objective, start),
+        self._search = threading.Thread(target=self._run_search, args=(settings, objective, start, start_rotation),
                                         name="supportless-ui-search", daemon=True)
         self._notify("search_started")
         self._search.start()
         return True
 
-    def _run_search(self, settings: SearchSettings, objective: Objective, start: np.ndarray) -> None:
+    def _run_search(self, settings: SearchSettings, objective: Objective, start: np.ndarray,
+                    start_rotation: np.ndarray) -> None:
         def callback(iteration, info):
             with self._lock:
                 self._angles = np.array(info["angles"], np.float64)
-                self.progress.update(iteration=iteration, value=float(info["value"]))
+                self._rotation = np.array(info["rotation"], np.float64)
+                self.progress.update(iteration=iteration, iterations=int(info["iterations"]),
+                                     value=float(info["value"]))
             self._notify("pose", origin="search")
             self._notify("progress")
             return False if self._cancel.is_set() else None
 
         try:
-            result = optimize(self.rig, settings, objective=objective, start=start, callback=callback)
+            result = optimize(self.rig, settings, objective=objective, start=start, start_rotation=start_rotation,
+                              callback=callback)
         except Exception as exc:  # noqa: BLE001 - reported to the listeners, the app keeps running
             logger.exception("pose search failed")
             with self._lock:
@@ -480,6 +641,7 @@ class EditorState:
             return
         with self._lock:
             self._angles = np.array(result.angles, np.float64)
+            self._rotation = np.array(result.rotation, np.float64)
             self.last_result = result
             self.progress.update(running=False, cancelled=bool(result.interrupted), value=result.value)
         self._notify("pose", origin="search")
