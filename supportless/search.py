@@ -242,7 +242,8 @@ class _Timed:
 
     def __init__(self, fn: Callable, stats: dict, name: str):
         self.fn, self.stats, self.name = fn, stats, name
-        stats[f"{name}_calls"], stats[f"{name}_seconds"] = 0, 0.0
+        stats.setdefault(f"{name}_calls", 0)
+        stats.setdefault(f"{name}_seconds", 0.0)
 
     def __call__(self, *args):
         t = time.perf_counter()

@@ -104,8 +104,13 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     # fixed bones keep zero angles; the output sits on the plate
     assert np.all(a.angles[a.fixed] == 0)
     assert np.isclose((a.vertices @ rig.up).min(), 0.0, atol=1e-12)
-    assert len(a.history) == 7 and all(len(v) == 6 for v in a.term_history.values())
-    assert a.stats["progress_calls"] == 6
+    # orient="free": the pose-only phase, then pose and turn (6 iterations each), the best value never rising
+    assert len(a.history) == 13 and all(len(v) == 12 for v in a.term_history.values())
+    assert np.all(np.diff(a.history) <= 0)
+    assert a.stats["progress_calls"] == 12
+    kept = sl.optimize(rig, particles=12, iterations=6, seed=3, orient="keep")
+    assert len(kept.history) == 7 and kept.stats["progress_calls"] == 6
+    assert a.value <= kept.value  # the turning phase starts from the pose-only phase's best
 
 
 def test_optimize_reduces_support_of_the_cantilever(branch_rig):
@@ -289,3 +294,10 @@ def test_planar_search_turns_in_the_plane():
     assert result.rotation.shape == (2, 2) and result.print_vertices.shape == rig.vertices.shape
     np.testing.assert_allclose(result.rotation @ result.rotation.T, np.eye(2), atol=1e-12)
     assert (result.print_vertices @ rig.up).min() == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_repeated_search_is_never_worse_than_its_start_pose_and_turn(branch_rig):
+    first = sl.optimize(branch_rig, particles=12, iterations=5, seed=0)
+    again = sl.optimize(branch_rig, particles=6, iterations=0, seed=9, start=first.angles,
+                        start_rotation=first.rotation)
+    assert again.value <= first.value + 1e-12

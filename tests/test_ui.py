@@ -17,6 +17,8 @@ import pytest
 from conftest import unavailable
 from supportless import io as sio
 from supportless.errors import InputError
+from supportless.geometry import print_pose, print_transform
+from supportless.orientation import rotation_between
 from supportless.rig import load_rig
 from supportless.settings import SearchSettings
 from supportless.ui import App, find_free_port
@@ -147,14 +149,67 @@ def test_planar_rig(tmp_path, rig_cache_dir):
 def test_save_and_load_pose(app, rig, tmp_path):
     app.reset()
     app.state.set_bone_angles(rig.bone_count - 1, [0, 0, 25.0])
+    R = rotation_between(rig.up, np.array([1.0, 0, 0]))
+    app.state.set_rotation(R)
     target = app.state.get_angles()
     path = tmp_path / "pose.json"
     assert app.save_pose(path)
+    assert np.allclose(sio.read_print_rotation(path, 3), R)
     app.reset()
+    assert np.array_equal(app.state.get_rotation(), np.eye(3))
     assert app.load_pose(path)
-    assert np.allclose(app.state.get_angles(), target)
+    assert np.allclose(app.state.get_angles(), target) and np.allclose(app.state.get_rotation(), R)
+    app.reset()
     assert app.load_pose_bytes("up.json", path.read_bytes())
-    assert np.allclose(app.state.get_angles(), target)
+    assert np.allclose(app.state.get_angles(), target) and np.allclose(app.state.get_rotation(), R)
+    app.reset()
+    assert app.wait_idle()
+
+
+def test_print_view_shows_the_pose_turned_onto_the_plate(app, rig):
+    from supportless.ui.scene import quat_from_matrix
+
+    app.reset()
+    b = rig.bone_count - 1
+    app.state.select_bone(b)
+    app.state.set_bone_angles(b, [0, 0, 30.0])
+    R = rotation_between(rig.up, np.array([1.0, 0, 0]))
+    app.state.set_rotation(R)
+    angles = app.state.get_angles()
+    V = rig.pose(angles)
+    try:
+        assert app.wait_idle()
+        assert np.allclose(app.shown_vertices, V)  # standing by default
+        assert np.array_equal(app.measures["rotation"], R)
+        assert np.array_equal(app.measures["risky"], app.state.measure(exact=False)["risky"])
+        assert "turned 90.0°" in app.panel.measures.content and "counted as printed" in app.panel.measures.content
+        app.set_view(frame="print")
+        assert app.panel.view.value == "as printed"
+        assert app.wait_idle()
+        printed = print_pose(V, R, rig.up)
+        assert np.allclose(app.shown_vertices, printed, atol=1e-12)
+        assert float((app.shown_vertices @ rig.up).min()) == pytest.approx(0.0, abs=1e-12)
+        # the skeleton and the gizmo are turned with the mesh
+        shift = print_transform(V, R, rig.up)
+        joints = np.array([h.position for h in app.scene.h_joints])
+        assert np.allclose(joints, rig.posed_joints(angles) @ R.T + shift, atol=1e-5)
+        bone_frame = rig.transforms(angles)[b][:, :3]
+        assert abs(float(np.dot(app.scene.h_gizmo.wxyz, quat_from_matrix(R @ bone_frame)))) == pytest.approx(1.0)
+        # the same pose standing again
+        app.set_view(frame="standing")
+        assert app.wait_idle()
+        assert np.allclose(app.shown_vertices, V)
+        with pytest.raises(ValueError, match="frame must be one of"):
+            app.set_view(frame="sideways")
+        app.print_upright()
+        assert np.array_equal(app.state.get_rotation(), np.eye(3))
+        assert np.array_equal(app.state.get_angles(), angles)
+        assert app.wait_idle()
+        assert "as it stands" in app.panel.measures.content
+    finally:
+        app.set_view(frame="standing")
+        app.reset()
+        assert app.wait_idle()
 
 
 def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_path):
@@ -212,12 +267,18 @@ def test_optimize_in_background_and_cancel(app, rig):
     assert app.state.wait_optimize(300)
     assert app.state.last_result is not None and not app.state.last_result.interrupted
     assert np.allclose(app.state.get_angles(), app.state.last_result.angles)
+    R = app.state.get_rotation()
+    assert np.array_equal(R, app.state.last_result.rotation) and not np.allclose(R, np.eye(3))
+    assert np.allclose(R @ R.T, np.eye(3), atol=1e-12)
     assert app.wait_idle()
+    assert np.array_equal(app.measures["rotation"], R)
+    assert app.measures["objective"] == pytest.approx(app.state.last_result.value, rel=1e-12)
     assert app.measures["support_column"] < rest_column
     assert app.state.progress["iteration"] == 4
+    assert "printed turned" in app.status
     # the user can undo back to where the search started, and cancel a long search
     assert app.undo()
-    assert np.allclose(app.state.get_angles(), 0.0)
+    assert np.allclose(app.state.get_angles(), 0.0) and np.array_equal(app.state.get_rotation(), np.eye(3))
     assert app.start_optimize(particles=8, iterations=100000)
     app.state.cancel_optimize()
     assert app.state.wait_optimize(120)
@@ -247,8 +308,15 @@ def test_panel_shows_the_objective_its_search_minimises(app, rig):
         assert "out of range" in app.status and not app.state.optimizing
         assert app.change_setting("fix", "")
         assert "out of range" not in app.panel.fixed_info.content
+        # the print orientation mode
+        assert app.panel.settings["orient"].value == "free"
+        assert app.change_setting("orient", "keep")
+        assert app.state.settings.orient == "keep" and app.panel.settings["orient"].value == "keep"
+        assert "as it stands (Orientation: keep)" in app.panel.fixed_info.content
+        assert not app.change_setting("orient", "sideways")
+        assert app.state.settings.orient == "keep" and "orient" in app.panel.invalid
     finally:
-        for name in ("w_overhang", "overhang_angle", "fix"):
+        for name in ("w_overhang", "overhang_angle", "fix", "orient"):
             app.change_setting(name, getattr(defaults, name))
     assert app.state.settings == defaults
     assert app.wait_idle()
@@ -346,6 +414,18 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             done_text = energies.inner_text()
             assert _number(done_text, "Support (column)") < rest_column
             assert "less than rest" in done_text
+            assert "Printed: turned" in done_text  # the search turned the branch onto its side
+            # show it as printed: the view follows the panel's choice
+            view = page.get_by_role("combobox", name="View")
+            view.click()
+            page.get_by_role("option", name="as printed").click()
+            for _ in range(100):
+                if app.view["frame"] == "print":
+                    break
+                page.wait_for_timeout(100)
+            assert app.view["frame"] == "print"
+            assert app.wait_idle()
+            assert np.allclose(app.shown_vertices, app.state.printed_on_plate(), atol=1e-12)
             # a clean picture: no software-WebGL notice, panel scrolled to the energies
             from playwright.sync_api import TimeoutError as PlaywrightTimeout
 

@@ -10,7 +10,10 @@ import pytest
 
 from supportless import io as sio
 from supportless.errors import SupportlessError
+from supportless.geometry import print_pose
 from supportless.kinematics import euler_to_matrix
+from supportless.orientation import print_direction, rotation_axis_angle, rotation_between
+from supportless.report import pose_measures
 from supportless.search import optimize
 from supportless.settings import SearchSettings
 from supportless.ui.state import EditorState
@@ -182,15 +185,25 @@ def test_measured_objective_is_the_one_the_search_minimises(state, branch_rig):
         settings = SearchSettings(**changes)
         state.update_settings(**dataclasses.asdict(settings))
         assert state.settings == settings
+        assert np.array_equal(state.get_rotation(), np.eye(3))  # printed as it stands
         expected = float(settings.objective(rig)(pose))
         measured = state.measure(pose)
         assert measured["objective"] == pytest.approx(expected, rel=1e-12)
         assert measured["overhang_angle"] == settings.overhang_angle  # supports at the printer's threshold
         assert state.objective.overhang_angle == settings.search_overhang_angle
-        # the value the search reports for this very pose (no bone free: the start pose is the result)
-        result = optimize(rig, settings, start=pose, fix="all", iterations=0)
-        assert np.array_equal(result.angles, pose)
+        # the value the search reports for this very pose, printed as it stands (no bone free, no turn:
+        # the start pose is the result)
+        result = optimize(rig, settings.replace(orient="keep"), start=pose, fix="all", iterations=0)
+        assert np.array_equal(result.angles, pose) and np.array_equal(result.rotation, np.eye(3))
         assert result.value == pytest.approx(measured["objective"], rel=1e-12)
+        # searching the orientation too: the best of the turned starting particles, measured with its turn
+        turned = optimize(rig, settings, start=pose, fix="all", iterations=0)
+        assert np.array_equal(turned.angles, pose) and not np.allclose(turned.rotation, np.eye(3))
+        measured = state.measure(pose, rotation=turned.rotation)
+        assert turned.value == pytest.approx(measured["objective"], rel=1e-12)
+        assert turned.value < result.value  # the turn is counted: printed on its side it needs less
+        assert measured["objective"] == pytest.approx(
+            float(settings.objective(rig)(pose, turned.rotation)), rel=1e-12)
 
 
 def test_settings_share_the_distortion_operators(state):
@@ -212,7 +225,7 @@ def test_invalid_bone_list_is_a_clear_error(state, branch_rig):
     with pytest.raises(ValueError, match="out of range"):
         state.start_optimize(free="0")
     with pytest.raises(ValueError, match="every bone is fixed"):
-        state.start_optimize(fix="all")
+        state.start_optimize(fix="all", orient="keep")  # with orient="free" the search may still turn it
     assert not state.optimizing
     state.update_settings(fix="1", free="")
     assert state.fixed[0] and state.settings.fix == ("1",)
@@ -230,12 +243,13 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
     assert result is not None and not result.interrupted
     assert result.value <= start_value + 1e-12  # never worse than where it started
     assert np.array_equal(state.get_angles(), result.angles)
-    assert state.progress == {"iteration": 4, "iterations": 4, "value": result.value, "running": False,
+    # orient="free" (the default): the pose-only phase and the turning phase, 4 iterations each
+    assert state.progress == {"iteration": 8, "iterations": 8, "value": result.value, "running": False,
                               "cancelled": False, "free_bones": int((~state.fixed).sum())}
     assert state.search_settings.particles == 10 and state.settings.particles == SearchSettings().particles
     events = [e for e, _ in seen]
     assert events[0] == "pose" and events[1] == "search_started" and events[-1] == "search_done"
-    assert events.count("progress") == 4
+    assert events.count("progress") == 8
     assert ("pose", {"origin": "search"}) in seen
     assert state.undo()
     assert np.array_equal(state.get_angles(), start)
@@ -266,3 +280,172 @@ def test_planar_rig_turns_about_the_plane_normal(rig_cache_dir, tmp_path):
     assert m["risky"].shape == (len(boundary_edges(rig.faces)),)  # one flag per boundary edge
     assert m["intersecting_faces"] is None and "intersecting_face_pairs" not in m
     assert state.export_mesh("flat.obj").is_file()
+    # a planar print rotation: an angle, no axis
+    R = np.array([[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]])
+    state.set_rotation(R)
+    m = state.measure(exact=False)
+    assert m["turn_axis"] is None and m["turn_deg"] == pytest.approx(np.degrees(0.5))
+    assert m["print_direction"].shape == (2,)
+    assert np.allclose(state.printed_on_plate(), print_pose(rig.pose(state.get_angles()), R, rig.up))
+    assert float((state.printed_on_plate() @ rig.up).min()) == pytest.approx(0.0, abs=1e-12)
+
+
+# --------------------------------------------------------------------------- #
+# the print rotation
+# --------------------------------------------------------------------------- #
+def _assert_same_measures(got, expected, path=""):
+    """Every entry of ``expected`` (a pose_measures dict) is in ``got`` with the same value."""
+    for key, value in expected.items():
+        assert key in got, f"{path}{key} missing"
+        if isinstance(value, dict):
+            _assert_same_measures(got[key], value, f"{path}{key}.")
+        elif isinstance(value, (bool, np.bool_)):
+            assert bool(got[key]) == bool(value), f"{path}{key}"
+        else:
+            assert np.allclose(got[key], value, rtol=1e-12, atol=1e-15), f"{path}{key}: {got[key]} != {value}"
+
+
+def _turn(rig):
+    """A print rotation laying the model on its side, (3, 3) float64."""
+    return rotation_between(rig.up, np.array([1.0, 0.0, 0.0]))
+
+
+def _is_rotation(R, d=3):
+    return R.shape == (d, d) and np.allclose(R @ R.T, np.eye(d), atol=1e-12) and np.linalg.det(R) == pytest.approx(1.0)
+
+
+def test_optimize_chooses_the_print_rotation_and_measures_use_it(state, branch_rig):
+    rig = branch_rig
+    assert np.array_equal(state.get_rotation(), np.eye(3))
+    assert state.settings.orient == "free"
+    start = state.get_angles()
+    assert state.start_optimize(particles=10, iterations=4, seed=2)
+    assert state.wait_optimize(300)
+    result = state.last_result
+    angles, R = state.get_pose()
+    assert _is_rotation(R)
+    assert np.array_equal(R, result.rotation) and np.array_equal(angles, result.angles)
+    assert not np.allclose(R, np.eye(3))  # the branch needs less support on its side
+    # the panel measures the pose as printed, as the report does
+    m = state.measure(exact=False)
+    expected = pose_measures(state.objective, angles, exact=False, overhang_angle=state.settings.overhang_angle,
+                             rotation=R)
+    _assert_same_measures(m, expected)
+    assert m["objective"] == pytest.approx(result.value, rel=1e-12)
+    assert m["support_prism"] < m["upright"]["support_prism"]  # the turn is what saves support
+    assert np.array_equal(m["rotation"], R)
+    assert m["turn_deg"] == pytest.approx(rotation_axis_angle(R)[1])
+    assert np.allclose(m["print_direction"], print_direction(R, rig.up))
+    assert np.allclose(m["print_direction"], R.T @ rig.up)
+    # risky faces: as printed, and standing
+    V = rig.pose(angles)
+    from supportless.energies.overhang import risky_faces
+
+    assert np.array_equal(m["risky"], risky_faces(V @ R.T, rig.faces, rig.up, state.settings.overhang_angle))
+    assert np.array_equal(m["risky_standing"], risky_faces(V, rig.faces, rig.up, state.settings.overhang_angle))
+    # editing a bone keeps the turn; undo goes back to the pose and rotation the search started from
+    state.set_bone_angles(rig.bone_count - 1, [0.0, 0.0, 15.0])
+    assert np.array_equal(state.get_rotation(), R)
+    assert state.undo() and state.undo()
+    assert np.array_equal(state.get_angles(), start) and np.array_equal(state.get_rotation(), np.eye(3))
+    assert state.redo()
+    assert np.array_equal(state.get_rotation(), R)
+    state.reset()
+    assert np.array_equal(state.get_rotation(), np.eye(3)) and np.allclose(state.get_angles(), 0.0)
+    assert state.undo() and np.array_equal(state.get_rotation(), R)  # reset is an undo step
+
+
+def test_keep_orientation_prints_as_it_stands(state, branch_rig):
+    state.set_rotation(_turn(branch_rig))
+    state.update_settings(orient="keep")
+    assert state.settings.orient == "keep"
+    assert state.start_optimize(particles=6, iterations=2, seed=1)
+    assert state.wait_optimize(300)
+    assert np.array_equal(state.get_rotation(), np.eye(3))
+    with pytest.raises(ValueError, match="orient must be one of"):
+        state.update_settings(orient="sideways")
+    assert state.settings.orient == "keep"
+
+
+def test_every_bone_fixed_still_turns_the_model(state, branch_rig):
+    state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 20.0])
+    pose = state.get_angles()
+    assert state.start_optimize(fix="all", particles=6, iterations=2)
+    assert state.wait_optimize(300)
+    assert np.array_equal(state.get_angles(), pose)
+    assert _is_rotation(state.get_rotation()) and not np.allclose(state.get_rotation(), np.eye(3))
+
+
+def test_set_rotation_checks_and_is_an_undo_step(state, branch_rig):
+    R = _turn(branch_rig)
+    pose = state.get_angles()
+    state.set_rotation(R)
+    assert np.array_equal(state.get_rotation(), R) and np.array_equal(state.get_angles(), pose)
+    for bad in (np.eye(2), 2 * np.eye(3), np.diag([1.0, 1.0, -1.0])):
+        with pytest.raises(ValueError, match="rotation matrix"):
+            state.set_rotation(bad)
+    assert np.array_equal(state.get_rotation(), R)
+    state.get_rotation()[:] = 0.0  # a copy
+    assert np.array_equal(state.get_rotation(), R)
+    assert state.undo() and np.array_equal(state.get_rotation(), np.eye(3))
+
+
+def test_print_frame_is_the_turned_pose_on_the_plate(state, branch_rig, tmp_path):
+    import trimesh
+
+    rig = branch_rig
+    state.set_bone_angles(rig.bone_count - 1, [0.0, 10.0, 30.0])
+    R = _turn(rig)
+    state.set_rotation(R)
+    angles = state.get_angles()
+    V = rig.pose(angles)
+    Q, shift = state.frame_transform("print")
+    expected = print_pose(V, R, rig.up)
+    assert np.array_equal(Q, R)
+    assert np.allclose(V @ Q.T + shift, expected, atol=1e-12)
+    assert float((expected @ rig.up).min()) == pytest.approx(0.0, abs=1e-12)
+    assert np.allclose(state.printed_on_plate(), expected, atol=1e-12)
+    Q, shift = state.frame_transform("standing")
+    assert np.array_equal(Q, np.eye(3)) and np.array_equal(shift, np.zeros(3))
+    with pytest.raises(ValueError, match="frame must be one of"):
+        state.frame_transform("sideways")
+    # the exported mesh is the one to slice: as printed; standing on request
+    printed = trimesh.load(state.export_mesh("printed.obj"), force="mesh", process=False)
+    assert np.allclose(printed.vertices, expected, atol=1e-5)
+    standing = trimesh.load(state.export_mesh("standing.obj", frame="standing"), force="mesh", process=False)
+    assert np.allclose(standing.vertices, state.posed_on_plate(), atol=1e-5)
+    assert not np.allclose(standing.vertices, printed.vertices, atol=1e-3)
+
+
+def test_pose_files_keep_the_print_rotation(state, branch_rig, tmp_path):
+    rig = branch_rig
+    state.set_bone_angles(rig.bone_count - 1, [5.0, -10.0, 25.0])
+    R = _turn(rig)
+    state.set_rotation(R)
+    target = state.get_angles()
+    path = state.save_pose("turned.json")
+    data = json.loads(path.read_text())
+    assert np.allclose(data["print_rotation"], R)
+    assert data["objective"] == pytest.approx(float(state.objective(target, R)))
+    assert np.allclose(sio.read_print_rotation(path, 3), R)
+    payload = state.pose_bytes()
+    state.reset()
+    assert np.array_equal(state.get_rotation(), np.eye(3))
+    state.load_pose(path)
+    assert np.array_equal(state.get_angles(), target) and np.allclose(state.get_rotation(), R, atol=1e-15)
+    assert state.undo() and np.array_equal(state.get_rotation(), np.eye(3))  # loading is an undo step
+    state.load_pose_bytes("uploaded.json", payload)
+    assert np.allclose(state.get_rotation(), R, atol=1e-15)
+    # a pose file without a print rotation prints as it stands
+    plain = tmp_path / "plain.json"
+    sio.write_pose(plain, target, rig.bones, rig.joints)
+    state.load_pose(plain)
+    assert np.array_equal(state.get_rotation(), np.eye(3))
+    # a broken print rotation is refused, the state stays
+    state.set_rotation(R)
+    broken = json.loads(path.read_text())
+    broken["print_rotation"] = [[2.0, 0, 0], [0, 1, 0], [0, 0, 1]]
+    (tmp_path / "broken.json").write_text(json.dumps(broken))
+    with pytest.raises(SupportlessError, match="print_rotation"):
+        state.load_pose("broken.json")
+    assert np.allclose(state.get_rotation(), R)
