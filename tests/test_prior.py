@@ -57,7 +57,7 @@ def test_turning_the_bunnys_head_costs_more_than_an_ear(bunny_rig):
 
 def test_limits_hold_per_bone_in_the_search(branch_rig):
     settings = sl.SearchSettings(particles=24, iterations=8, seed=1, joint_limit=20.0,
-                                 limits=("3=5",), free=("all",), keep_standing=False)
+                                 limits=("3=5",), free=("all",), keep_standing=False, orient="keep")
     result = sl.optimize(branch_rig, settings)
     turned = np.degrees(joint_angles(result.angles))
     assert np.all(turned <= settings.joint_limits(branch_rig) + 1e-9), turned
