@@ -355,7 +355,7 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     swarm, history, turned = None, [], False
     for phase, turns in enumerate(phases):
         if turns:
-            o = rig.dim - 1
+            o = variables(True)[0]
             seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle)
             # the best pose so far first (upright, then at each candidate direction): the swarm keeps it, so
             # this phase never ends worse than the last
