@@ -35,7 +35,7 @@ def _console():
     return Console(stderr=False, highlight=False)
 
 
-def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False):
+def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None):
     from .rig import load_rig
 
     def progress(msg):
@@ -43,9 +43,20 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
             click.echo(f"  {msg} ...", err=True)
 
     rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
-                   progress=progress)
+                   progress=progress, height_mm=height_mm)
+    source = rig.info.get("gltf")
+    if source is not None:  # what was done to the glTF asset, one line per step
+        for line in source["log"]:
+            if not quiet and not line.startswith("warning"):
+                click.echo(f"  glTF: {line}", err=True)
     for warning in rig.info.get("warnings", []):
-        click.echo(f"supportless: warning: {rig.name}: {warning}", err=True)
+        if source is not None and warning in source["log"] and not warning.startswith("warning"):
+            continue
+        click.echo(f"supportless: warning: {rig.name}: {warning.removeprefix('warning: ')}", err=True)
+    if source is not None and not quiet:
+        h = float(np.ptp(rig.vertices @ rig.up))
+        click.echo(f"  print body {h:.1f} mm tall" + ("" if height_mm else " (glTF metres as millimetres; "
+                                                      "--height-mm H scales it)"), err=True)
     return rig
 
 
@@ -54,14 +65,18 @@ def rig_options(f):
     f = click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
                      help="Rig cache folder (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")(f)
     f = click.option("--no-cache", is_flag=True, help="Prepare the rig again; do not read or write the cache.")(f)
+    f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
+                     help="Scale the model to this height along --up, in millimetres (default: as read; "
+                          "glTF metres become millimetres).")(f)
     f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
-                     help="Precomputed skinning weights (.dmat, one row per --tets vertex).")(f)
+                     help="Precomputed skinning weights (.dmat, one row per --tets vertex); for a glTF model "
+                          "'skin' (its own weights, the default) or 'bbw' (recomputed).")(f)
     f = click.option("--tets", type=click.Path(dir_okay=False), default=None,
                      help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
     f = click.option("--up", default="y", show_default=True,
                      help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
     f = click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None,
-                     help="TGF skeleton (default: MODEL with .tgf).")(f)
+                     help="TGF skeleton (default: MODEL with .tgf; a rigged .glb/.gltf needs none).")(f)
     return f
 
 
@@ -88,10 +103,10 @@ def main():
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @rig_options
-def prepare(model, skeleton, up, tets, weights, no_cache, cache_dir):
+def prepare(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir):
     """Tetrahedralise MODEL and compute its skinning weights (cached)."""
     t0 = time.perf_counter()
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     dt = time.perf_counter() - t0
     source = "from the cache" if rig.info.get("from_cache") else "prepared"
     click.echo(f"{rig.name}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
@@ -234,14 +249,16 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
 
     written = []
     if output:
-        write_mesh(output, result.print_vertices, rig.faces)
-        written.append(("posed mesh, as printed", output))
+        kind = _write_posed(output, rig, result.angles, result.vertices, result.print_vertices)
+        written.append((f"posed {kind}", output))
     if upright:
-        write_mesh(upright, result.vertices, rig.faces)
-        written.append(("posed mesh, standing", upright))
+        kind = _write_posed(upright, rig, result.angles, result.vertices, result.vertices)
+        written.append((f"posed {kind.replace('as printed', 'standing')}", upright))
     if pose:
-        write_pose(pose, result.angles, rig.bones, rig.joints, extra={"objective": result.value},
-                   rotation=result.rotation)
+        extra = {"objective": result.value}
+        if rig.labels is not None:
+            extra["bone_names"] = rig.bone_names()
+        write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation)
         written.append(("pose", pose))
     if pictures:
         written += write_pictures(pictures, rig, result, report)
@@ -269,7 +286,7 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, upright_out, report_path, pose,
+def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, output, upright_out, report_path, pose,
              pictures, slice_check_flag, quiet, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
@@ -278,7 +295,7 @@ def optimize(model, skeleton, up, tets, weights, no_cache, cache_dir, output, up
         _check_mesh_path(path)
     settings = _settings(**search_options)
     console = _console()
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet)
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
     result = _run_search(rig, console, settings, quiet)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
@@ -339,22 +356,39 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
               help="Posed mesh to write, in the pose's print orientation.")
 @click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
               help="Also write the posed mesh standing as the input stood.")
-def apply(model, skeleton, up, tets, weights, no_cache, cache_dir, pose, output, upright_out):
+def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, pose, output, upright_out):
     """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh."""
     from .geometry import place_on_plate, print_pose
     from .io import read_pose, read_print_rotation, write_mesh
 
     for path in (output, upright_out):
         _check_mesh_path(path)
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     angles = read_pose(pose, rig.bones)
     R = read_print_rotation(pose, rig.dim)
     standing = place_on_plate(rig.pose(angles), rig.up)
-    write_mesh(output, print_pose(standing, R, rig.up), rig.faces)
-    click.echo(f"wrote {output}")
-    if upright_out:
-        write_mesh(upright_out, standing, rig.faces)
-        click.echo(f"wrote {upright_out}")
+    for path, printed in ((output, True), (upright_out, False)):
+        if path:
+            _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing)
+            click.echo(f"wrote {path}")
+
+
+def _write_posed(path, rig, angles, standing, vertices) -> str:
+    """Write a posed model: the posed asset for a glTF rig written as .glb/.gltf, else the mesh ``vertices``.
+
+    Returns what was written ("asset, standing" or "mesh, as printed"/"mesh").
+    """
+    from .gltf import is_gltf, posed_joint_transforms, write_posed_gltf
+    from .io import write_mesh
+
+    source = rig.info.get("gltf")
+    if source is not None and is_gltf(path):
+        offset = (standing - rig.pose(angles))[0]
+        T = posed_joint_transforms(rig.transforms(angles), np.asarray(source["driver"]), source["scale"], offset)
+        write_posed_gltf(source["path"], path, T, np.asarray(source["joint_nodes"]))
+        return "glTF asset, standing (its skin posed)"
+    write_mesh(path, vertices, rig.faces)
+    return "mesh, as printed" if vertices is not standing else "mesh"
 
 
 def _check_mesh_path(path) -> None:
@@ -364,8 +398,8 @@ def _check_mesh_path(path) -> None:
     if path is None:
         return
     ext = Path(path).suffix.lower().lstrip(".")
-    if ext not in MESH_FORMATS:
-        raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    if ext not in MESH_FORMATS + ("gltf",):
+        raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS + ('gltf',))}")
 
 
 # --------------------------------------------------------------------------- #
@@ -451,7 +485,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
 @click.option("--demo", "demo_figure", is_flag=True, help="Open the built-in tpose figure.")
 @click.option("--port", default=None, type=click.IntRange(1, 65535), help="Port (default: a free one from 8080).")
 @click.option("--host", default="127.0.0.1", show_default=True, help="Address to bind.")
-def view(model, skeleton, up, tets, weights, no_cache, cache_dir, demo_figure, port, host):
+def view(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, demo_figure, port, host):
     """Pose MODEL in the browser: live supports, optimize, export."""
     from .ui.app import run_app
 
@@ -459,7 +493,7 @@ def view(model, skeleton, up, tets, weights, no_cache, cache_dir, demo_figure, p
         model = "demo:tpose"
     if model is None:
         _fail("give a MODEL (with --skeleton) or --demo")
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir)
+    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     run_app(rig, host=host, port=port, block=True)
 
 

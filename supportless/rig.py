@@ -29,10 +29,11 @@ from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 
-__all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
+__all__ = ["Rig", "compute_weights", "default_cache_dir", "load_gltf_arrays", "load_rig", "prepare_rig",
+           "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 3
+CACHE_VERSION = 4
 
 #: A joint outside the surface by at most this fraction of the model's height is
 #: moved inside (:func:`pull_joints_inside`); farther out is an error. Real tips
@@ -76,6 +77,11 @@ class Rig:
         Unit printing direction.
     name : str
         For reports and pictures.
+    info : dict
+        How the rig was made (timings, warnings, the source asset).
+    labels : list of str, optional
+        Bone names (a glTF rig's joint names); ``--fix``/``--free``/``--limit``
+        accept them besides the 1-based numbers.
     """
 
     vertices: np.ndarray
@@ -88,6 +94,7 @@ class Rig:
     up: np.ndarray
     name: str = "model"
     info: dict = field(default_factory=dict)
+    labels: list | None = None
 
     # ----------------------------------------------------------------- basics
     @property
@@ -178,8 +185,19 @@ class Rig:
         return len(self.bones)
 
     def bone_names(self) -> list[str]:
-        """Names for the bones, ``"bone 3 (4-5)"``, 1-based as in the TGF file."""
+        """Names for the bones: the rig's labels, else ``"bone 3 (4-5)"``, 1-based as in the TGF file."""
+        if self.labels is not None:
+            return list(self.labels)
         return [f"bone {i + 1} ({a + 1}-{b + 1})" for i, (a, b) in enumerate(self.bones)]
+
+    @cached_property
+    def weightless_bones(self) -> np.ndarray:
+        """(m,) bool: bones no vertex is weighted to (a glTF hip's second child).
+
+        Turning one only turns the bones below it, which their own bones do
+        already; the search keeps them fixed by default.
+        """
+        return self.tet_weights.max(axis=0) <= 1e-9
 
     # ----------------------------------------------------------------- posing
     def transforms(self, angles: np.ndarray) -> np.ndarray:
@@ -231,7 +249,7 @@ def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
     return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
 
 
-def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None):
+def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joints_inside=True):
     """Validate and normalise arrays; returns (V, F, joints, dim, warnings)."""
     if len(bones) == 0:
         raise InputError(skel_path, "skeleton has no bones")
@@ -256,6 +274,8 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None):
     check_closed_surface(V, F, mesh_path)
     if signed_volume(V, F) < 0:
         F = F[:, ::-1].copy()
+    if not joints_inside:  # the weights come with the model: joints are only pivots
+        return V, F, joints, 3, []
     joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
     return V, F, joints, 3, warnings
 
@@ -399,7 +419,7 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
 
 def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples_per_bone=SAMPLES_PER_BONE,
                 bbw_iterations=BBW_ITERATIONS, tet_mesh=None, tet_weights=None, mesh_path=None,
-                skeleton_path=None, progress=None) -> Rig:
+                skeleton_path=None, progress=None, surface_weights=None, labels=None) -> Rig:
     """Build a rig from arrays: volume mesh and bounded biharmonic weights.
 
     Parameters
@@ -425,22 +445,40 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         Named in error messages.
     progress : callable(str), optional
         Told about each stage.
+    surface_weights : (n, m) float64, optional
+        Skinning weights that come with the model (a glTF skin), rows summing
+        to 1. The volume mesh is then the surface's inside alone, the bones
+        need not lie inside it, and every volume vertex takes the weights of
+        its closest surface point (:func:`~supportless.printbody.transfer_values`).
+    labels : list of str, optional
+        Bone names (:attr:`Rig.labels`).
 
     Returns
     -------
     rig : Rig
     """
-    from .tetmesh import bone_samples, refine_triangulation_with_points, tetrahedralize_with_skeleton
+    from .tetmesh import (bone_samples, refine_triangulation_with_points, tetrahedralize_surface,
+                          tetrahedralize_with_skeleton)
 
     say = progress or (lambda msg: None)
     V = np.asarray(vertices, np.float64)
     F = np.asarray(faces, np.int64)
     J = np.asarray(joints, np.float64)
     B = np.asarray(bones, np.int64)
-    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path)
+    skinned = surface_weights is not None
+    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned)
     up_vec = parse_up(up, dim)
     t0 = time.perf_counter()
-    if tet_mesh is not None:
+    if skinned:
+        if dim != 3 or tet_mesh is not None or tet_weights is not None:
+            raise InputError(mesh_path, "skin weights from the model go with a 3D surface and no --tets/--weights")
+        Ws = np.asarray(surface_weights, np.float64)
+        if Ws.shape != (len(V), len(B)):
+            raise InputError(mesh_path, f"skin weights are {Ws.shape[0]}x{Ws.shape[1]} for {len(V)} vertices "
+                             f"and {len(B)} bones")
+        say("tetrahedralising")
+        TV, TT = tetrahedralize_surface(V, F)
+    elif tet_mesh is not None:
         TV, TT = (np.asarray(a) for a in tet_mesh)
         TV, TT, tet_order = _attach_surface(V, TV.astype(np.float64), TT.astype(np.int64), mesh_path)
     elif dim == 3:
@@ -450,7 +488,12 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         say("refining the planar mesh along the bones")
         TV, TT = refine_triangulation_with_points(V, F, bone_samples(J, B, samples_per_bone))
     t1 = time.perf_counter()
-    if tet_weights is not None:
+    if skinned:
+        from .printbody import transfer_values
+
+        W = np.vstack([Ws, transfer_values(TV[len(V):], V, F, Ws)]) if len(TV) > len(V) else Ws
+        W /= np.maximum(W.sum(1, keepdims=True), 1e-300)
+    elif tet_weights is not None:
         if tet_mesh is None:
             raise InputError(None, "precomputed weights need the tet mesh they were computed on (--tets)")
         W = np.asarray(tet_weights, np.float64)
@@ -463,8 +506,8 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         W = compute_weights(TV, TT, J, B, bbw_iterations)
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
-            "bbw_iterations": bbw_iterations, "warnings": warnings}
-    return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info)
+            "bbw_iterations": bbw_iterations, "warnings": warnings, "weights": "skin" if skinned else "bbw"}
+    return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info, labels=list(labels) if labels is not None else None)
 
 
 def _attach_surface(V, TV, TT, path):
@@ -515,14 +558,16 @@ def rig_cache_key(V, F, J, B, up, **settings) -> str:
 
 def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None, tets=None, weights=None,
              samples_per_bone: int = SAMPLES_PER_BONE, bbw_iterations: int = BBW_ITERATIONS,
-             progress=None) -> Rig:
+             progress=None, height_mm: float | None = None) -> Rig:
     """Read a model and its skeleton and prepare (or load from the cache) its rig.
 
     Parameters
     ----------
     model : str or os.PathLike
-        Surface mesh file (OBJ, STL, PLY, OFF, 3MF, GLB), or ``"demo:NAME"`` for a
-        built-in figure (then ``skeleton`` is not needed).
+        Surface mesh file (OBJ, STL, PLY, OFF, 3MF, GLB), a rigged glTF/GLB
+        asset (with no ``skeleton``: its skin is read, see
+        :func:`load_gltf_arrays`), or ``"demo:NAME"`` for a built-in figure
+        (then ``skeleton`` is not needed).
     skeleton : str or os.PathLike
         TGF skeleton. Defaults to the model's path with ``.tgf``.
     up : str or sequence of float
@@ -534,28 +579,57 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     tets : str or os.PathLike, optional
         Precomputed libigl ``.mesh`` volume mesh.
     weights : str or os.PathLike, optional
-        Precomputed ``.dmat`` weights on the ``tets`` vertices (t rows, m columns).
+        Precomputed ``.dmat`` weights on the ``tets`` vertices (t rows, m
+        columns); for a glTF asset ``"skin"`` (default: the file's skin
+        weights) or ``"bbw"`` (bounded biharmonic weights recomputed).
     samples_per_bone, bbw_iterations : int
         See :func:`prepare_rig`.
     progress : callable(str), optional
+    height_mm : float, optional
+        Scale the model so its height along ``up`` is this many millimetres
+        (default: as read; a glTF asset's metres become millimetres).
 
     Returns
     -------
     rig : Rig
     """
+    from .gltf import is_gltf
+
+    surface_weights = labels = source = None
     if isinstance(model, str) and model.startswith("demo:"):
         from .shapes import demo_figure
 
         figure = model.split(":", 1)[1]
         V, F, J, B = demo_figure(figure)
         name, mesh_path, skel_path = figure, None, None
+    elif skeleton is None and is_gltf(model):
+        mesh_path, skel_path, name = Path(model), Path(model), Path(model).stem
+        if weights not in (None, "skin", "bbw"):
+            raise InputError(weights, "a glTF model takes --weights skin (its own, the default) or --weights bbw")
+        if tets is not None:
+            raise InputError(tets, "--tets does not go with a glTF model's skin; leave it out")
+        V, F, J, B, surface_weights, labels, source = load_gltf_arrays(mesh_path, progress=progress)
+        if weights == "bbw":
+            surface_weights = None
+        weights = None
     else:
         mesh_path = Path(model)
         skel_path = Path(skeleton) if skeleton is not None else mesh_path.with_suffix(".tgf")
         V, F = read_mesh(mesh_path)
         J, B = read_tgf(skel_path)
         name = mesh_path.stem
+    if height_mm is not None:
+        h = np.ptp(V @ parse_up(up, V.shape[1]))
+        if not h > 0:
+            raise InputError(mesh_path, "the model has no height along the printing direction")
+        factor = float(height_mm) / h
+        V, J = V * factor, J * factor
+        if source is not None:
+            source["scale"] *= factor
     settings = dict(samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations)
+    if surface_weights is not None:
+        settings["skin"] = hashlib.sha256(np.ascontiguousarray(surface_weights).tobytes()).hexdigest()
+        settings["labels"] = "|".join(labels)
     tet_arrays = read_tet_mesh(tets) if tets is not None else None
     W = None
     if weights is not None:
@@ -575,6 +649,8 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     if cache and file.is_file():
         try:
             rig = _read_cached(file, name)
+            if source is not None:
+                rig.info["gltf"] = source
             rig.info["cache"] = str(file)
             rig.info["from_cache"] = True
             return rig
@@ -582,7 +658,10 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
             pass
     rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
                       tet_mesh=tet_arrays, tet_weights=W, mesh_path=mesh_path, skeleton_path=skel_path,
-                      progress=progress)
+                      progress=progress, surface_weights=surface_weights, labels=labels)
+    if source is not None:
+        rig.info["gltf"] = source
+        rig.info["warnings"] = list(source["log"]) + list(rig.info.get("warnings", []))
     rig.info["from_cache"] = False
     if cache:
         try:
@@ -601,7 +680,8 @@ def _write_cached(file: Path, rig: Rig) -> None:
     with atomic_path(file) as tmp:
         with open(tmp, "wb") as fh:
             np.savez(fh, version=CACHE_VERSION, warnings=np.array(rig.info.get("warnings", []), dtype=str),
-                     **{k: getattr(rig, k) for k in _ARRAYS})
+                     labels=np.array(rig.labels if rig.labels is not None else [], dtype=str),
+                     has_labels=rig.labels is not None, **{k: getattr(rig, k) for k in _ARRAYS})
 
 
 def _read_cached(file: Path, name: str) -> Rig:
@@ -610,4 +690,62 @@ def _read_cached(file: Path, name: str) -> Rig:
             raise ValueError("old cache version")
         arrays = {k: data[k] for k in _ARRAYS}
         warnings = [str(w) for w in data["warnings"]]
-    return Rig(**arrays, name=name, info={"warnings": warnings})
+        labels = [str(x) for x in data["labels"]] if bool(data["has_labels"]) else None
+    return Rig(**arrays, name=name, info={"warnings": warnings}, labels=labels)
+
+
+def load_gltf_arrays(path, progress=None):
+    """The print body, bones and skin weights of a rigged glTF/GLB asset.
+
+    Reads the skin in its bind pose (:func:`~supportless.gltf.read_gltf_skin`),
+    makes the closed print body from all its parts with the weights carried
+    along (:func:`~supportless.printbody.print_body`), derives the bones from
+    the joints (:func:`~supportless.gltf.skeleton_from_joints`) and converts
+    the file's metres to millimetres.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    progress : callable(str), optional
+
+    Returns
+    -------
+    V : (n, 3) float64
+        Print body, millimetres, +Y up.
+    F : (f, 3) int64
+    J : (j, 3) float64
+    B : (m, 2) int64
+    W : (n, m) float64
+        Skin weights per bone, rows summing to 1.
+    labels : list of str
+        Bone names after the joints.
+    source : dict
+        ``path``, ``scale`` (file units to the rig's), ``joint_nodes``,
+        ``driver`` (bone each skin joint follows) and ``log`` (one line per
+        step), for writing the posed asset and for the report.
+    """
+    from .gltf import METRES_TO_MM, read_gltf_skin, skeleton_from_joints
+    from .printbody import print_body
+
+    say = progress or (lambda msg: None)
+    say("reading the glTF skin")
+    skin = read_gltf_skin(path)
+    say("making the print body")
+    try:
+        body = print_body(skin.vertices, skin.faces, skin.part, skin.weights, skin.part_names)
+    except InputError as exc:
+        raise InputError(path, exc.reason) from None
+    try:
+        sk = skeleton_from_joints(skin.joint_positions, skin.joint_parents, body.values, skin.joint_names,
+                                  body.vertices)
+    except InputError as exc:
+        raise InputError(path, exc.reason) from None
+    log = list(skin.notes) + list(body.log)
+    kept = len(skin.joint_names) - len(sk.pruned)
+    log.append(f"skeleton: {len(sk.bones)} bones from {kept} of {len(skin.joint_names)} joints"
+               + (f"; pruned {len(sk.pruned)} without weight: {', '.join(sk.pruned[:12])}"
+                  + (" ..." if len(sk.pruned) > 12 else "") if sk.pruned else ""))
+    scale = METRES_TO_MM
+    source = {"path": str(path), "scale": scale, "joint_nodes": skin.joint_nodes.tolist(),
+              "driver": sk.driver.tolist(), "log": log}
+    return body.vertices * scale, body.faces, sk.joints * scale, sk.bones, sk.weights, sk.names, source

@@ -211,7 +211,7 @@ class SearchSettings:
         out = np.full(rig.bone_count, float(self.joint_limit))
         for item in self.limits:
             bone, _, value = item.partition("=")
-            out[_bone_index(bone, rig.bone_count)] = float(value)
+            out[_bone_index(bone, rig.bone_count, rig.labels)] = float(value)
         return out
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
@@ -261,18 +261,24 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
         For a name that is not a bone number or ``"all"``.
     """
     m = rig.bone_count
-    fixed = rig.anchored_bones.copy()
+    fixed = rig.anchored_bones | rig.weightless_bones
     for names, value in ((fix, True), (free, False)):
         for name in names or []:
             if str(name).lower() == "all":
                 fixed[:] = value
                 continue
-            fixed[_bone_index(name, m)] = value
+            fixed[_bone_index(name, m, rig.labels)] = value
     return fixed
 
 
-def _bone_index(name, m: int) -> int:
-    """0-based index of a 1-based bone number given as text; ValueError otherwise."""
+def _bone_index(name, m: int, labels: list | None = None) -> int:
+    """0-based index of a bone given as its 1-based number or (a glTF rig) its name; ValueError otherwise."""
+    if labels is not None and str(name) in labels:
+        return labels.index(str(name))
+    if labels is not None and not str(name).strip().isdigit():
+        close = [x for x in labels if str(name).lower() in x.lower()][:5]
+        raise ValueError(f"bone {name!r} is not a bone name or number 1..{m}"
+                         + (f"; did you mean {', '.join(close)}?" if close else ""))
     try:
         b = int(name) - 1
     except ValueError:

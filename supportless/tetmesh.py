@@ -15,7 +15,8 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["bone_samples", "refine_triangulation_with_points", "tetrahedralize_with_skeleton", "triangulate_planar"]
+__all__ = ["bone_samples", "refine_triangulation_with_points", "tetrahedralize_surface", "tetrahedralize_with_skeleton",
+           "triangulate_planar"]
 
 #: TetGen switches: p = piecewise linear complex, q2 = quality bound, Y = keep
 #: the surface unchanged (so surface vertices are the first rows), Q = quiet.
@@ -82,6 +83,45 @@ def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints
     TT = np.asarray(TT, np.int64)
     if len(TV) < len(V) or not np.array_equal(TV[: len(V)], V):
         raise InputError(None, "TetGen changed the surface vertices; the surface may self-intersect")
+    return TV, TT
+
+
+def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
+                           flags: str = TETGEN_FLAGS) -> tuple[np.ndarray, np.ndarray]:
+    """Tetrahedralise the inside of a closed surface (no bones inside).
+
+    For rigs whose weights come with the model (a glTF skin), where the bones
+    only give pivots and need not lie inside.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Closed, manifold, outward-oriented surface (several solids allowed).
+    faces : (f, 3) int64
+    flags : str
+        TetGen switches; ``Y`` must stay so the surface is kept as given.
+
+    Returns
+    -------
+    tet_vertices : (t, 3) float64
+        The first ``n`` rows are ``vertices`` unchanged.
+    tets : (k, 4) int64
+    """
+    import igl
+    import igl.copyleft.tetgen  # noqa: F401  (registers the submodule)
+
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int64)
+    try:
+        with _silence_stdout():
+            out = igl.copyleft.tetgen.tetrahedralize(V, F, flags=flags)
+    except RuntimeError as exc:
+        raise InputError(None, f"TetGen could not tetrahedralise the surface ({exc}); "
+                         "check it is closed and free of self-intersections") from None
+    TV, TT = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
+    if len(TT) == 0 or len(TV) < len(V) or not np.array_equal(TV[: len(V)], V):
+        raise InputError(None, "TetGen could not tetrahedralise the surface without changing it; "
+                         "the surface may self-intersect")
     return TV, TT
 
 

@@ -1,0 +1,748 @@
+"""Rigged glTF/GLB characters: the skin in its bind pose, and the posed asset out.
+
+Read with pygltflib (trimesh drops skins). :func:`read_gltf_skin` returns every
+triangle of the asset in the **bind pose** in world space (+Y up, the file's
+units) with the skin weights of each vertex over the joints:
+
+* skinned primitives: ``world = G_mesh · v`` with the joints' bind globals
+  ``B_j = G_mesh · IBM_j⁻¹`` (``G_mesh`` the skinned node's global transform,
+  ``IBM_j`` the inverse bind matrix). Applying the glTF skinning formula
+  ``Σ w_j G_j IBM_j v`` with ``G_j = B_j`` gives the same points, so the bind
+  pose is exactly the pose the weights were painted in, whatever the default
+  pose of the nodes (an animation frame, arms down) is;
+* rigid meshes (a mesh node under a joint, not skinned) follow their nearest
+  joint ancestor: weight 1 on it, placed where the bind pose puts that joint;
+* JOINTS_n/WEIGHTS_n in every component type, normalised and sparse
+  accessors, strips and fans; rows of weights that do not sum to 1 are
+  normalised (and counted); morph targets are ignored (and said).
+
+:func:`skeleton_from_joints` turns the joint hierarchy into the bones the
+search rotates, and :func:`write_posed_gltf` writes the original asset with a
+pose set on its joint nodes.
+"""
+
+from __future__ import annotations
+
+import base64
+import os
+import urllib.parse
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["GLTF_SUFFIXES", "GltfSkin", "RigSkeleton", "is_gltf", "posed_joint_transforms", "read_accessor",
+           "read_gltf_skin", "skeleton_from_joints", "write_posed_gltf"]
+
+GLTF_SUFFIXES = (".glb", ".gltf")
+
+#: glTF lengths are metres; the print body is in millimetres.
+METRES_TO_MM = 1000.0
+
+#: A joint carries weight when its total weight is above this fraction of the
+#: total over all joints (one vertex in 10^7 with full weight).
+WEIGHT_EPS = 1e-7
+
+_COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+_NORMALISE = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
+_WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_COMPRESSION = ("KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression")
+
+
+def is_gltf(path) -> bool:
+    """Whether a path names a glTF asset (``.glb`` or ``.gltf``)."""
+    return Path(path).suffix.lower() in GLTF_SUFFIXES
+
+
+# --------------------------------------------------------------------------- #
+# low level: buffers, accessors, node transforms
+# --------------------------------------------------------------------------- #
+def _load_document(path):
+    """The pygltflib document and the bytes of each buffer; InputError on a broken file."""
+    try:
+        import pygltflib
+    except ImportError:  # pragma: no cover - a declared dependency
+        raise InputError(path, "reading glTF needs pygltflib: pip install pygltflib") from None
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        doc = pygltflib.GLTF2().load(str(path))
+    except Exception as exc:  # pygltflib raises many kinds on a corrupt file
+        raise InputError(path, f"not a readable glTF file ({type(exc).__name__}: {exc}); "
+                         "export it again from the modelling tool") from None
+    if doc is None:
+        raise InputError(path, "not a readable glTF file; export it again from the modelling tool")
+    used = set(doc.extensionsRequired or []) | set(doc.extensionsUsed or [])
+    for ext in _COMPRESSION:
+        if ext in used:
+            raise InputError(path, f"the meshes are compressed with {ext}, which supportless cannot decode; "
+                             "export the model again without mesh compression")
+    buffers = []
+    for i, buf in enumerate(doc.buffers or []):
+        uri = buf.uri
+        try:
+            if uri is None:
+                data = doc.binary_blob() or b""
+            elif uri.startswith("data:"):
+                data = base64.b64decode(uri.split(",", 1)[1])
+            else:
+                data = (path.parent / urllib.parse.unquote(uri)).read_bytes()
+        except (OSError, ValueError) as exc:
+            raise InputError(path, f"buffer {i} ({uri or 'GLB chunk'}) cannot be read ({exc}); "
+                             "keep the .bin files next to the .gltf") from None
+        if len(data) < (buf.byteLength or 0):
+            raise InputError(path, f"buffer {i} holds {len(data)} bytes but the file says {buf.byteLength}; "
+                             "the file is truncated")
+        buffers.append(data)
+    return doc, buffers
+
+
+def _view(doc, buffers, view_index: int, path) -> tuple[bytes, int, int]:
+    """(buffer bytes, start offset, stride or 0) of a buffer view."""
+    try:
+        view = doc.bufferViews[view_index]
+        data = buffers[view.buffer]
+    except (IndexError, TypeError):
+        raise InputError(path, f"buffer view {view_index} does not exist; the file is broken") from None
+    return data, view.byteOffset or 0, view.byteStride or 0
+
+
+def _read_raw(data: bytes, start: int, stride: int, count: int, dtype, width: int, path) -> np.ndarray:
+    itemsize = np.dtype(dtype).itemsize * width
+    stride = stride or itemsize
+    need = start + stride * (count - 1) + itemsize if count else start
+    if count and need > len(data):
+        raise InputError(path, f"an accessor reads past the end of its buffer ({need} > {len(data)} bytes); "
+                         "the file is truncated or broken")
+    if count == 0:
+        return np.zeros((0, width), dtype)
+    raw = np.frombuffer(data, np.uint8, count=stride * (count - 1) + itemsize, offset=start)
+    rows = np.lib.stride_tricks.as_strided(raw, (count, itemsize), (stride, 1))
+    return np.ascontiguousarray(rows).view(dtype).reshape(count, width)
+
+
+def read_accessor(doc, buffers, index: int, path=None) -> np.ndarray:
+    """The values of one accessor.
+
+    Parameters
+    ----------
+    doc : pygltflib.GLTF2
+    buffers : list of bytes
+        Each buffer's content.
+    index : int
+    path : optional
+        Named in error messages.
+
+    Returns
+    -------
+    values : (count, width) float64 or int64
+        Floats, and normalised integers mapped to [0, 1] or [-1, 1], as
+        float64; other integers as int64. Sparse substitutions applied.
+    """
+    try:
+        acc = doc.accessors[index]
+        dtype = _COMPONENTS[acc.componentType]
+        width = _WIDTHS[acc.type]
+    except (IndexError, KeyError, TypeError):
+        raise InputError(path, f"accessor {index} does not exist or has an unknown type; the file is broken") from None
+    if acc.bufferView is None:
+        out = np.zeros((acc.count, width), dtype)
+    else:
+        data, start, stride = _view(doc, buffers, acc.bufferView, path)
+        out = _read_raw(data, start + (acc.byteOffset or 0), stride, acc.count, dtype, width, path).copy()
+    sparse = acc.sparse
+    if sparse is not None and sparse.count:
+        idx_dtype = _COMPONENTS.get(sparse.indices.componentType)
+        data, start, _ = _view(doc, buffers, sparse.indices.bufferView, path)
+        rows = _read_raw(data, start + (sparse.indices.byteOffset or 0), 0, sparse.count, idx_dtype, 1, path)[:, 0]
+        data, start, _ = _view(doc, buffers, sparse.values.bufferView, path)
+        values = _read_raw(data, start + (sparse.values.byteOffset or 0), 0, sparse.count, dtype, width, path)
+        rows = rows.astype(np.int64)
+        if rows.size and (rows.min() < 0 or rows.max() >= acc.count):
+            raise InputError(path, f"sparse accessor {index} substitutes rows outside 0..{acc.count - 1}")
+        out[rows] = values
+    if acc.componentType == 5126:
+        return out.astype(np.float64)
+    if acc.normalized:
+        return np.maximum(out.astype(np.float64) / _NORMALISE[acc.componentType], -1.0)
+    return out.astype(np.int64)
+
+
+def _quat_matrix(q) -> np.ndarray:
+    x, y, z, w = (float(c) for c in q)
+    n = x * x + y * y + z * z + w * w
+    if n < 1e-20:
+        return np.eye(3)
+    s = 2.0 / n
+    return np.array([
+        [1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)],
+        [s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)],
+        [s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)],
+    ])
+
+
+def _matrix_quat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (x, y, z, w) of a rotation matrix (3, 3)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(R).as_quat()
+
+
+def node_local(node) -> np.ndarray:
+    """(4, 4) float64: a node's local transform (its matrix, or T·R·S)."""
+    if node.matrix is not None and len(node.matrix) == 16:
+        return np.asarray(node.matrix, np.float64).reshape(4, 4).T
+    M = np.eye(4)
+    S = np.diag(np.asarray(node.scale if node.scale is not None else (1, 1, 1), np.float64))
+    R = _quat_matrix(node.rotation if node.rotation is not None else (0, 0, 0, 1))
+    M[:3, :3] = R @ S
+    M[:3, 3] = node.translation if node.translation is not None else (0, 0, 0)
+    return M
+
+
+def node_parents(doc, path=None) -> np.ndarray:
+    """(N,) int64: each node's parent (-1 for roots); InputError on a cycle or a shared child."""
+    parents = np.full(len(doc.nodes), -1, np.int64)
+    for i, node in enumerate(doc.nodes):
+        for c in node.children or []:
+            if not 0 <= c < len(doc.nodes) or parents[c] >= 0 or c == i:
+                raise InputError(path, f"node {i} ({node.name}) has an invalid child {c}; the node tree is broken")
+            parents[c] = i
+    for i in range(len(doc.nodes)):  # cycle check
+        seen, p = 0, i
+        while p >= 0:
+            p = parents[p]
+            seen += 1
+            if seen > len(doc.nodes):
+                raise InputError(path, f"the node tree has a cycle through node {i} ({doc.nodes[i].name})")
+    return parents
+
+
+def node_globals(locals_: np.ndarray, parents: np.ndarray) -> np.ndarray:
+    """(N, 4, 4) float64: global transforms from local ones and the parent of each node."""
+    G = np.full_like(locals_, np.nan)
+    done = np.zeros(len(parents), bool)
+
+    def visit(i):
+        chain = []
+        while i >= 0 and not done[i]:
+            chain.append(i)
+            i = parents[i]
+        for k in reversed(chain):
+            p = parents[k]
+            G[k] = locals_[k] if p < 0 else G[p] @ locals_[k]
+            done[k] = True
+
+    for i in range(len(parents)):
+        visit(i)
+    return G
+
+
+def _apply(M: np.ndarray, X: np.ndarray) -> np.ndarray:
+    return X @ M[:3, :3].T + M[:3, 3]
+
+
+# --------------------------------------------------------------------------- #
+# the skin in the bind pose
+# --------------------------------------------------------------------------- #
+@dataclass
+class GltfSkin:
+    """All triangles of a glTF asset in its bind pose, with weights over the joints.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64
+        Bind pose, world space, the file's units (+Y up).
+    faces : (f, 3) int64
+        Per primitive, vertices not shared between primitives.
+    part : (f,) int64
+        Which part (primitive instance) each face comes from.
+    part_names : list of str
+    weights : (n, J) float64
+        Rows sum to 1 over the joints.
+    joint_nodes : (J,) int64
+        The node of each joint.
+    joint_names : list of str
+    joint_parents : (J,) int64
+        Nearest joint ancestor (-1 for none).
+    bind_globals : (N, 4, 4) float64
+        Every node's global transform in the bind pose.
+    default_globals : (N, 4, 4) float64
+        Every node's global transform as stored (the default pose).
+    notes : list of str
+        What was read and what was done (one line each).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    part: np.ndarray
+    part_names: list
+    weights: np.ndarray
+    joint_nodes: np.ndarray
+    joint_names: list
+    joint_parents: np.ndarray
+    bind_globals: np.ndarray
+    default_globals: np.ndarray
+    notes: list = field(default_factory=list)
+
+    @property
+    def joint_positions(self) -> np.ndarray:
+        """(J, 3) float64: joints in the bind pose."""
+        return self.bind_globals[self.joint_nodes, :3, 3]
+
+
+def _triangles(mode, idx: np.ndarray) -> np.ndarray | None:
+    """(f, 3) triangles of a primitive's index list, or None for points/lines."""
+    if mode in (None, 4):
+        return idx[: len(idx) // 3 * 3].reshape(-1, 3)
+    if mode == 5:  # strip
+        k = np.arange(len(idx) - 2)
+        tri = np.column_stack([idx[k], idx[k + 1], idx[k + 2]])
+        odd = k % 2 == 1
+        tri[odd] = tri[odd][:, [1, 0, 2]]
+        return tri
+    if mode == 6:  # fan
+        k = np.arange(1, len(idx) - 1)
+        return np.column_stack([np.full(len(k), idx[0]), idx[k], idx[k + 1]])
+    return None
+
+
+def read_gltf_skin(path) -> GltfSkin:
+    """Read a rigged glTF/GLB asset in its bind pose.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    skin : GltfSkin
+
+    Raises
+    ------
+    InputError
+        One line: unreadable file, compressed meshes, no skin, no triangles, a
+        broken node tree or accessor.
+    """
+    doc, buffers = _load_document(path)
+    nodes = doc.nodes or []
+    if not doc.skins:
+        raise InputError(path, "has no skin (no joints); supportless needs a rigged model — rig it (e.g. in "
+                         "Blender) and export it with the armature, or give a mesh with a TGF --skeleton")
+    parents = node_parents(doc, path)
+    locals_ = np.array([node_local(n) for n in nodes]) if nodes else np.zeros((0, 4, 4))
+    default = node_globals(locals_, parents)
+    notes: list[str] = []
+
+    # joints: every node any skin lists, in first-seen order
+    joint_nodes: list[int] = []
+    ibm: dict[int, np.ndarray] = {}
+    skin_users: dict[int, int] = {}
+    for n_idx, node in enumerate(nodes):
+        if node.skin is not None and node.mesh is not None:
+            skin_users.setdefault(node.skin, n_idx)
+    for s_idx, skin in enumerate(doc.skins):
+        mats = None
+        if skin.inverseBindMatrices is not None:
+            mats = read_accessor(doc, buffers, skin.inverseBindMatrices, path).reshape(-1, 4, 4).transpose(0, 2, 1)
+            if len(mats) < len(skin.joints):
+                raise InputError(path, f"skin {s_idx} has {len(skin.joints)} joints but {len(mats)} inverse bind matrices")
+        mesh_global = default[skin_users[s_idx]] if s_idx in skin_users else np.eye(4)
+        for k, j in enumerate(skin.joints):
+            if not 0 <= j < len(nodes):
+                raise InputError(path, f"skin {s_idx} names node {j}, which does not exist")
+            if j not in ibm:
+                joint_nodes.append(j)
+                # bind global B_j = G_mesh · IBM_j^-1 (identity IBM: the joint's own default global)
+                ibm[j] = mesh_global @ np.linalg.inv(mats[k]) if mats is not None else default[j]
+    is_joint = np.zeros(len(nodes), bool)
+    is_joint[joint_nodes] = True
+
+    def joint_ancestor(i):
+        p = i
+        while p >= 0 and not is_joint[p]:
+            p = parents[p]
+        return p
+
+    # bind globals of every node: joints from the IBMs, others follow their nearest joint ancestor
+    bind = default.copy()
+    for j in joint_nodes:
+        bind[j] = ibm[j]
+    for i in range(len(nodes)):
+        if not is_joint[i]:
+            a = joint_ancestor(parents[i]) if parents[i] >= 0 else -1
+            if a >= 0:
+                bind[i] = bind[a] @ np.linalg.inv(default[a]) @ default[i]
+    column = {n: k for k, n in enumerate(joint_nodes)}
+    J = len(joint_nodes)
+
+    Vs, Fs, Ws, parts, names = [], [], [], [], []
+    offset = 0
+    morphs = unnormalised = orphans = 0
+    max_sum = 1.0
+    skipped_modes = 0
+    for n_idx, node in enumerate(nodes):
+        if node.mesh is None:
+            continue
+        try:
+            mesh = doc.meshes[node.mesh]
+        except (IndexError, TypeError):
+            raise InputError(path, f"node {n_idx} names mesh {node.mesh}, which does not exist") from None
+        skin = doc.skins[node.skin] if node.skin is not None and node.skin < len(doc.skins) else None
+        for p_idx, prim in enumerate(mesh.primitives):
+            attrs = prim.attributes
+            if attrs.POSITION is None:
+                continue
+            X = read_accessor(doc, buffers, attrs.POSITION, path)[:, :3]
+            idx = (read_accessor(doc, buffers, prim.indices, path)[:, 0] if prim.indices is not None
+                   else np.arange(len(X)))
+            tri = _triangles(prim.mode, np.asarray(idx, np.int64))
+            if tri is None:
+                skipped_modes += 1
+                continue
+            if len(tri) and (tri.min() < 0 or tri.max() >= len(X)):
+                raise InputError(path, f"mesh {mesh.name or node.mesh} indexes a vertex that does not exist")
+            if prim.targets:
+                morphs += 1
+            W = np.zeros((len(X), J))
+            if skin is not None and attrs.JOINTS_0 is not None and attrs.WEIGHTS_0 is not None:
+                world = _apply(default[n_idx], X)
+                for js, ws in (("JOINTS_0", "WEIGHTS_0"), ("JOINTS_1", "WEIGHTS_1")):
+                    ja, wa = getattr(attrs, js, None), getattr(attrs, ws, None)
+                    if ja is None or wa is None:
+                        continue
+                    jv = read_accessor(doc, buffers, ja, path).astype(np.int64)
+                    wv = read_accessor(doc, buffers, wa, path).astype(np.float64)
+                    if jv.size and (jv.min() < 0 or jv.max() >= len(skin.joints)):
+                        raise InputError(path, f"mesh {mesh.name or node.mesh} uses joint index {int(jv.max())} "
+                                         f"but its skin has {len(skin.joints)} joints")
+                    cols = np.array([column[j] for j in skin.joints], np.int64)[jv]
+                    np.add.at(W, (np.repeat(np.arange(len(X)), jv.shape[1]), cols.ravel()),
+                              np.clip(wv, 0, None).ravel())
+            else:  # rigid: follows its nearest joint ancestor
+                world = _apply(bind[n_idx], X)
+                a = joint_ancestor(n_idx)
+                if a < 0 and J:
+                    centre = world.mean(0) if len(world) else np.zeros(3)
+                    a = joint_nodes[int(np.argmin(np.linalg.norm(bind[joint_nodes, :3, 3] - centre, axis=1)))]
+                    notes.append(f"mesh '{mesh.name or node.mesh}' hangs from no joint; it follows the nearest "
+                                 f"joint '{nodes[a].name or a}'")
+                W[:, column[a]] = 1.0
+            sums = W.sum(1)
+            zero = sums <= 1e-9
+            if np.any(zero):  # a skinned vertex with no weight: give it to the node's joint ancestor
+                orphans += int(zero.sum())
+                a = joint_ancestor(n_idx)
+                W[zero, column[a] if a >= 0 else 0] = 1.0
+                sums = W.sum(1)
+            off = np.abs(sums - 1.0) > 1e-3
+            if np.any(off):
+                unnormalised += int(off.sum())
+                max_sum = max(max_sum, float(sums.max()))
+            W /= sums[:, None]
+            Vs.append(world)
+            Fs.append(tri + offset)
+            Ws.append(W)
+            parts.append(np.full(len(tri), len(names), np.int64))
+            names.append(f"{mesh.name or f'mesh {node.mesh}'}#{p_idx}" if len(mesh.primitives) > 1
+                         else (mesh.name or f"mesh {node.mesh}"))
+            offset += len(X)
+    if not Fs or sum(len(f) for f in Fs) == 0:
+        raise InputError(path, "has no triangles to print")
+    if not np.any([s.joints for s in doc.skins]):
+        raise InputError(path, "its skin lists no joints; export it again with the armature")
+    V = np.vstack(Vs)
+    if not np.all(np.isfinite(V)):
+        raise InputError(path, "has NaN or infinite vertex positions")
+    notes.insert(0, f"read {len(names)} primitive(s), {len(V)} vertices, {sum(len(f) for f in Fs)} triangles, "
+                 f"{J} joints in {len(doc.skins)} skin(s)")
+    if unnormalised:
+        notes.append(f"skin weights of {unnormalised} vertices did not sum to 1 (up to {max_sum:.3g}); normalised")
+    if orphans:
+        notes.append(f"{orphans} skinned vertices had no weight; they follow their mesh's joint")
+    if morphs:
+        notes.append(f"morph targets of {morphs} primitive(s) ignored (the base shape is posed)")
+    if skipped_modes:
+        notes.append(f"{skipped_modes} point/line primitive(s) ignored")
+    parent_joint = np.array([joint_ancestor(parents[j]) if parents[j] >= 0 else -1 for j in joint_nodes], np.int64)
+    joint_parents = np.array([column[p] if p >= 0 else -1 for p in parent_joint], np.int64)
+    return GltfSkin(V, np.vstack(Fs), np.concatenate(parts), names, np.vstack(Ws), np.asarray(joint_nodes, np.int64),
+                    [nodes[j].name or f"joint{k}" for k, j in enumerate(joint_nodes)], joint_parents, bind, default,
+                    notes)
+
+
+# --------------------------------------------------------------------------- #
+# bones from the joints
+# --------------------------------------------------------------------------- #
+@dataclass
+class RigSkeleton:
+    """The bones derived from a joint hierarchy (:func:`skeleton_from_joints`).
+
+    Attributes
+    ----------
+    joints : (k, 3) float64
+        Kept joints, then one added tip per weighted leaf.
+    bones : (m, 2) int64
+        ``[root, tip]`` rows into ``joints``.
+    names : list of str
+        Per bone: the joint whose weight it carries, or ``"PARENT>CHILD"`` for a
+        bone that carries none.
+    weights : (n, m) float64
+        The skin weights moved from joints to bones; rows sum to 1.
+    joint_of : (k,) int64
+        The skin joint (column of :attr:`GltfSkin.weights`) of each row of
+        ``joints``, -1 for an added tip.
+    driver : (J,) int64
+        For every skin joint, the bone whose motion it follows when posed.
+    pruned : list of str
+        Names of the joints left out.
+    """
+
+    joints: np.ndarray
+    bones: np.ndarray
+    names: list
+    weights: np.ndarray
+    joint_of: np.ndarray
+    driver: np.ndarray
+    pruned: list
+
+
+def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np.ndarray, names: list,
+                         vertices: np.ndarray) -> RigSkeleton:
+    """Bones from a joint hierarchy and its skin weights.
+
+    A bone per kept parent→child pair. Joints with no weight on them or below
+    them are pruned (IK and pole targets, ``*_end`` tips); so is a chain of
+    unweighted roots above the first joint that joins weighted parts (a
+    ``_rootJoint`` on the floor). A weighted leaf gets a bone of its own,
+    towards the centre of the skin it carries (along its parent's direction
+    when that centre is at the joint), as long as that skin reaches. Each
+    joint's weight goes to the bone that starts at it and passes nearest the
+    centre of its skin; a bone that starts at a joint but carries none of its
+    weight (a hip's second child) carries no weight.
+
+    Parameters
+    ----------
+    positions : (J, 3) float64
+    parents : (J,) int64
+        -1 for a root.
+    weights : (n, J) float64
+    names : list of str, length J
+    vertices : (n, 3) float64
+
+    Returns
+    -------
+    skeleton : RigSkeleton
+    """
+    P = np.asarray(positions, np.float64)
+    parents = np.asarray(parents, np.int64)
+    W = np.asarray(weights, np.float64)
+    X = np.asarray(vertices, np.float64)
+    nj = len(P)
+    mass = W.sum(0)
+    weighted = mass > WEIGHT_EPS * max(mass.sum(), 1e-300)
+    children: list[list[int]] = [[] for _ in range(nj)]
+    for j, p in enumerate(parents):
+        if p >= 0:
+            children[p].append(j)
+    # kept: weighted, or with a weighted descendant (bottom-up)
+    keep = weighted.copy()
+    order = _joint_order(parents)
+    for j in order[::-1]:
+        if parents[j] >= 0 and keep[j]:
+            keep[parents[j]] = True
+    # unweighted roots with a single kept child are dropped, repeatedly
+    root = parents.copy()
+    changed = True
+    while changed:
+        changed = False
+        for j in range(nj):
+            if keep[j] and not weighted[j] and (root[j] < 0 or not keep[root[j]]):
+                kids = [c for c in children[j] if keep[c]]
+                if len(kids) == 1:
+                    keep[j] = False
+                    changed = True
+    kparent = np.array([p if p >= 0 and keep[p] else -1 for p in parents], np.int64)
+    scale = float(np.ptp(X, axis=0).max()) if len(X) else 1.0
+    centres = np.zeros((nj, 3))
+    for j in np.flatnonzero(weighted):
+        centres[j] = W[:, j] @ X / mass[j]
+    joints = [P[j] for j in range(nj)]
+    joint_of = list(range(nj))
+    bones, names_out, carrier = [], [], {}
+    for j in order:
+        if not keep[j]:
+            continue
+        kids = [c for c in children[j] if keep[c]]
+        for c in kids:
+            bones.append((j, c))
+        if weighted[j]:
+            if kids:
+                seg = [_point_segment_distance(centres[j], P[j], P[c]) for c in kids]
+                carrier[j] = len(bones) - len(kids) + int(np.argmin(seg))
+            else:  # weighted leaf: a bone of its own, as far as its skin reaches
+                direction = centres[j] - P[j]
+                if np.linalg.norm(direction) < 0.02 * scale and kparent[j] >= 0:
+                    direction = P[j] - P[kparent[j]]
+                if np.linalg.norm(direction) < 1e-12 * scale:
+                    direction = np.array([0.0, 1.0, 0.0])
+                direction /= np.linalg.norm(direction)
+                region = W[:, j] >= 0.5 * W[:, j].max()
+                reach = float(np.max((X[region] - P[j]) @ direction)) if np.any(region) else 0.0
+                length = max(reach, 0.02 * scale)
+                joints.append(P[j] + length * direction)
+                joint_of.append(-1)
+                bones.append((j, len(joints) - 1))
+                carrier[j] = len(bones) - 1
+    B = np.asarray(bones, np.int64).reshape(-1, 2)
+    if len(B) == 0:
+        raise InputError(None, "the skeleton has no bone that carries weight")
+    # renumber joints to the kept ones
+    used = np.unique(B)
+    remap = -np.ones(len(joints), np.int64)
+    remap[used] = np.arange(len(used))
+    Jout = np.asarray(joints)[used]
+    Bout = remap[B]
+    jof = np.asarray(joint_of, np.int64)[used]
+    Wb = np.zeros((len(X), len(B)))
+    for j, b in carrier.items():
+        Wb[:, b] += W[:, j]
+    s = Wb.sum(1, keepdims=True)
+    Wb /= np.where(s > 0, s, 1.0)
+    bone_names = []
+    owner = {b: j for j, b in carrier.items()}
+    for b, (a, c) in enumerate(B):
+        if b in owner:
+            bone_names.append(names[owner[b]])
+        else:
+            bone_names.append(f"{names[a]}>{names[c]}" if c < nj else f"{names[a]}>tip")
+    # driver: a joint's own bone; joints without one follow their parent's
+    driver = np.full(nj, -1, np.int64)
+    incoming = {int(c): b for b, (a, c) in enumerate(B) if c < nj}
+    for j in order:
+        if j in carrier:
+            driver[j] = carrier[j]
+        elif j in incoming:
+            driver[j] = incoming[j]
+        elif parents[j] >= 0:
+            driver[j] = driver[parents[j]]
+    pruned = [names[j] for j in range(nj) if not keep[j]]
+    return RigSkeleton(Jout, Bout, bone_names, Wb, jof, driver, pruned)
+
+
+def _joint_order(parents: np.ndarray) -> np.ndarray:
+    """Joints with parents before children."""
+    depth = np.zeros(len(parents), np.int64)
+    for j in range(len(parents)):
+        d, p = 0, parents[j]
+        while p >= 0:
+            d, p = d + 1, parents[p]
+        depth[j] = d
+    return np.argsort(depth, kind="stable")
+
+
+def _point_segment_distance(x, a, b) -> float:
+    ab = b - a
+    t = np.clip((x - a) @ ab / max(ab @ ab, 1e-300), 0.0, 1.0)
+    return float(np.linalg.norm(x - (a + t * ab)))
+
+
+# --------------------------------------------------------------------------- #
+# the posed asset
+# --------------------------------------------------------------------------- #
+def posed_joint_transforms(bone_transforms: np.ndarray, driver: np.ndarray, scale: float,
+                           offset: np.ndarray | None = None) -> np.ndarray:
+    """The world transform of every skin joint, in the file's units, from the rig's bone transforms.
+
+    Parameters
+    ----------
+    bone_transforms : (m, 3, 4) float64
+        ``[A | t]`` per bone in the rig's frame (file units times ``scale``).
+    driver : (J,) int64
+        The bone each skin joint follows (:attr:`RigSkeleton.driver`), -1 for
+        none (it only takes ``offset``).
+    scale : float
+        Rig units per file unit.
+    offset : (3,) float64, optional
+        A translation added after posing, rig units (e.g. onto the plate).
+
+    Returns
+    -------
+    transforms : (J, 4, 4) float64
+    """
+    T = np.asarray(bone_transforms, np.float64)
+    driver = np.asarray(driver, np.int64)
+    out = np.tile(np.eye(4), (len(driver), 1, 1))
+    has = driver >= 0
+    out[has, :3, :3] = T[driver[has], :, :3]
+    out[has, :3, 3] = T[driver[has], :, 3] / scale
+    if offset is not None:
+        out[:, :3, 3] += np.asarray(offset, np.float64) / scale
+    return out
+
+
+def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_nodes: np.ndarray) -> None:
+    """Write the original asset with a pose set on its joint nodes.
+
+    Every primitive, material, texture, animation and the skin are kept; only
+    the joint nodes' local transforms change, so that the glTF skinning
+    formula poses the skin as ``joint_transforms`` say.
+
+    Parameters
+    ----------
+    source : str or os.PathLike
+        The asset the pose was found for.
+    destination : str or os.PathLike
+        ``.glb`` or ``.gltf`` (a ``.gltf`` embeds its buffers).
+    joint_transforms : (J, 4, 4) float64
+        World-space rigid transform (the file's units) each joint's bind
+        global is moved by: its new global is ``T_j · B_j``.
+    joint_nodes : (J,) int64
+        The node of each joint (:attr:`GltfSkin.joint_nodes`).
+    """
+    import pygltflib
+
+    from .io import atomic_path
+
+    skin = read_gltf_skin(source)
+    doc = pygltflib.GLTF2().load(str(source))
+    parents = node_parents(doc, source)
+    locals_ = np.array([node_local(n) for n in doc.nodes])
+    new_global = {int(j): np.asarray(T) @ skin.bind_globals[int(j)] for j, T in zip(joint_nodes, joint_transforms)}
+    G = np.full_like(locals_, np.nan)
+    for i in _joint_order(parents):
+        p = parents[i]
+        if i in new_global:
+            G[i] = new_global[i]
+        else:
+            G[i] = locals_[i] if p < 0 else G[p] @ locals_[i]
+    for i in new_global:
+        p = parents[i]
+        L = G[i] if p < 0 else np.linalg.solve(G[p], G[i])
+        node = doc.nodes[i]
+        A = L[:3, :3]
+        U, S, Vt = np.linalg.svd(A)
+        R = U @ Vt
+        if np.linalg.det(R) < 0:
+            U[:, -1] *= -1
+            R = U @ Vt
+        scale = np.diag(R.T @ A)
+        if node.matrix is not None and len(node.matrix) == 16:
+            node.matrix = L.T.ravel().tolist()
+        else:
+            node.translation = L[:3, 3].tolist()
+            node.rotation = _matrix_quat(R).tolist()
+            node.scale = scale.tolist()
+    destination = Path(destination)
+    if destination.suffix.lower() == ".gltf":
+        doc.convert_buffers(pygltflib.BufferFormat.DATAURI)
+    elif str(source).lower().endswith(".gltf"):
+        doc.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
+    with atomic_path(destination) as tmp:
+        if destination.suffix.lower() == ".gltf":
+            doc.save_json(str(tmp))
+        else:
+            doc.save_binary(str(tmp))
