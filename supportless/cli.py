@@ -244,7 +244,7 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
 
     Returns [(label, path)].
     """
-    from .io import write_json, write_mesh, write_pose
+    from .io import write_json, write_pose
     from .report import write_pictures
 
     written = []
@@ -359,7 +359,7 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
 def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, pose, output, upright_out):
     """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh."""
     from .geometry import place_on_plate, print_pose
-    from .io import read_pose, read_print_rotation, write_mesh
+    from .io import read_pose, read_print_rotation
 
     for path in (output, upright_out):
         _check_mesh_path(path)

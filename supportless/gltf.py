@@ -16,7 +16,7 @@ units) with the skin weights of each vertex over the joints:
   accessors, strips and fans; rows of weights that do not sum to 1 are
   normalised (and counted); morph targets are ignored (and said).
 
-:func:`skeleton_from_joints` turns the joint hierarchy into the bones the
+:func:`~supportless.joints.skeleton_from_joints` turns the joint hierarchy into the bones the
 search rotates, and :func:`write_posed_gltf` writes the original asset with a
 pose set on its joint nodes.
 """
@@ -24,7 +24,6 @@ pose set on its joint nodes.
 from __future__ import annotations
 
 import base64
-import os
 import urllib.parse
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,18 +31,15 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .joints import joint_order
 
-__all__ = ["GLTF_SUFFIXES", "GltfSkin", "RigSkeleton", "is_gltf", "posed_joint_transforms", "read_accessor",
-           "read_gltf_skin", "skeleton_from_joints", "write_posed_gltf"]
+__all__ = ["GLTF_SUFFIXES", "GltfSkin", "is_gltf", "load_gltf_character", "posed_joint_transforms", "read_accessor",
+           "read_gltf_skin", "write_posed_gltf"]
 
 GLTF_SUFFIXES = (".glb", ".gltf")
 
 #: glTF lengths are metres; the print body is in millimetres.
 METRES_TO_MM = 1000.0
-
-#: A joint carries weight when its total weight is above this fraction of the
-#: total over all joints (one vertex in 10^7 with full weight).
-WEIGHT_EPS = 1e-7
 
 _COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _NORMALISE = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
@@ -341,6 +337,7 @@ def read_gltf_skin(path) -> GltfSkin:
     joint_nodes: list[int] = []
     ibm: dict[int, np.ndarray] = {}
     skin_users: dict[int, int] = {}
+    skin_matrices: dict[int, np.ndarray] = {}  # per skin: (k, 4, 4) B_j · IBM_j, the bind pose's joint matrices
     for n_idx, node in enumerate(nodes):
         if node.skin is not None and node.mesh is not None:
             skin_users.setdefault(node.skin, n_idx)
@@ -356,8 +353,11 @@ def read_gltf_skin(path) -> GltfSkin:
                 raise InputError(path, f"skin {s_idx} names node {j}, which does not exist")
             if j not in ibm:
                 joint_nodes.append(j)
-                # bind global B_j = G_mesh · IBM_j^-1 (identity IBM: the joint's own default global)
+                # bind global B_j = G_mesh · IBM_j^-1; with no IBMs (identity, the spec's default) the
+                # vertices are in each joint's own frame and the bind pose is the stored pose
                 ibm[j] = mesh_global @ np.linalg.inv(mats[k]) if mats is not None else default[j]
+        skin_matrices[s_idx] = (np.array([ibm[j] @ mats[k] for k, j in enumerate(skin.joints)]) if mats is not None
+                                else default[list(skin.joints)])
     is_joint = np.zeros(len(nodes), bool)
     is_joint[joint_nodes] = True
 
@@ -408,8 +408,10 @@ def read_gltf_skin(path) -> GltfSkin:
             if prim.targets:
                 morphs += 1
             W = np.zeros((len(X), J))
-            if skin is not None and attrs.JOINTS_0 is not None and attrs.WEIGHTS_0 is not None:
+            skinned = skin is not None and attrs.JOINTS_0 is not None and attrs.WEIGHTS_0 is not None
+            if skinned:
                 world = _apply(default[n_idx], X)
+                Wk = np.zeros((len(X), len(skin.joints)))  # over this skin's joints
                 for js, ws in (("JOINTS_0", "WEIGHTS_0"), ("JOINTS_1", "WEIGHTS_1")):
                     ja, wa = getattr(attrs, js, None), getattr(attrs, ws, None)
                     if ja is None or wa is None:
@@ -419,9 +421,19 @@ def read_gltf_skin(path) -> GltfSkin:
                     if jv.size and (jv.min() < 0 or jv.max() >= len(skin.joints)):
                         raise InputError(path, f"mesh {mesh.name or node.mesh} uses joint index {int(jv.max())} "
                                          f"but its skin has {len(skin.joints)} joints")
-                    cols = np.array([column[j] for j in skin.joints], np.int64)[jv]
-                    np.add.at(W, (np.repeat(np.arange(len(X)), jv.shape[1]), cols.ravel()),
-                              np.clip(wv, 0, None).ravel())
+                    np.add.at(Wk, (np.repeat(np.arange(len(X)), jv.shape[1]), jv.ravel()), np.clip(wv, 0, None).ravel())
+                total = Wk.sum(1)
+                has = total > 1e-9
+                if skin.inverseBindMatrices is None and np.any(has):
+                    # no IBMs: the vertices are in the joints' frames; skin them in the stored pose
+                    # (with IBMs every bind-pose joint matrix is G_mesh, so world = G_mesh · v above, exactly)
+                    M = skin_matrices[node.skin]
+                    posed = np.einsum("vk,kab,vb->va", Wk[has] / total[has, None], M[:, :3, :],
+                                      np.column_stack([X[has], np.ones(int(has.sum()))]))
+                    world[has] = posed
+                cols = np.array([column[j] for j in skin.joints], np.int64)
+                for k in range(len(skin.joints)):
+                    W[:, cols[k]] += Wk[:, k]
             else:  # rigid: follows its nearest joint ancestor
                 world = _apply(bind[n_idx], X)
                 a = joint_ancestor(n_idx)
@@ -475,179 +487,63 @@ def read_gltf_skin(path) -> GltfSkin:
 
 
 # --------------------------------------------------------------------------- #
-# bones from the joints
+# the character to prepare
 # --------------------------------------------------------------------------- #
-@dataclass
-class RigSkeleton:
-    """The bones derived from a joint hierarchy (:func:`skeleton_from_joints`).
+def load_gltf_character(path, progress=None):
+    """The print body, bones and skin weights of a rigged glTF/GLB asset.
 
-    Attributes
-    ----------
-    joints : (k, 3) float64
-        Kept joints, then one added tip per weighted leaf.
-    bones : (m, 2) int64
-        ``[root, tip]`` rows into ``joints``.
-    names : list of str
-        Per bone: the joint whose weight it carries, or ``"PARENT>CHILD"`` for a
-        bone that carries none.
-    weights : (n, m) float64
-        The skin weights moved from joints to bones; rows sum to 1.
-    joint_of : (k,) int64
-        The skin joint (column of :attr:`GltfSkin.weights`) of each row of
-        ``joints``, -1 for an added tip.
-    driver : (J,) int64
-        For every skin joint, the bone whose motion it follows when posed.
-    pruned : list of str
-        Names of the joints left out.
-    """
-
-    joints: np.ndarray
-    bones: np.ndarray
-    names: list
-    weights: np.ndarray
-    joint_of: np.ndarray
-    driver: np.ndarray
-    pruned: list
-
-
-def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np.ndarray, names: list,
-                         vertices: np.ndarray) -> RigSkeleton:
-    """Bones from a joint hierarchy and its skin weights.
-
-    A bone per kept parent→child pair. Joints with no weight on them or below
-    them are pruned (IK and pole targets, ``*_end`` tips); so is a chain of
-    unweighted roots above the first joint that joins weighted parts (a
-    ``_rootJoint`` on the floor). A weighted leaf gets a bone of its own,
-    towards the centre of the skin it carries (along its parent's direction
-    when that centre is at the joint), as long as that skin reaches. Each
-    joint's weight goes to the bone that starts at it and passes nearest the
-    centre of its skin; a bone that starts at a joint but carries none of its
-    weight (a hip's second child) carries no weight.
+    Reads the skin in its bind pose (:func:`read_gltf_skin`),
+    makes the closed print body from all its parts with the weights carried
+    along (:func:`~supportless.printbody.print_body`), derives the bones from
+    the joints (:func:`~supportless.joints.skeleton_from_joints`) and converts
+    the file's metres to millimetres.
 
     Parameters
     ----------
-    positions : (J, 3) float64
-    parents : (J,) int64
-        -1 for a root.
-    weights : (n, J) float64
-    names : list of str, length J
-    vertices : (n, 3) float64
+    path : str or os.PathLike
+    progress : callable(str), optional
 
     Returns
     -------
-    skeleton : RigSkeleton
+    V : (n, 3) float64
+        Print body, millimetres, +Y up.
+    F : (f, 3) int64
+    J : (j, 3) float64
+    B : (m, 2) int64
+    W : (n, m) float64
+        Skin weights per bone, rows summing to 1.
+    labels : list of str
+        Bone names after the joints.
+    source : dict
+        ``path``, ``scale`` (file units to the rig's), ``joint_nodes``,
+        ``driver`` (bone each skin joint follows) and ``log`` (one line per
+        step), for writing the posed asset and for the report.
     """
-    P = np.asarray(positions, np.float64)
-    parents = np.asarray(parents, np.int64)
-    W = np.asarray(weights, np.float64)
-    X = np.asarray(vertices, np.float64)
-    nj = len(P)
-    mass = W.sum(0)
-    weighted = mass > WEIGHT_EPS * max(mass.sum(), 1e-300)
-    children: list[list[int]] = [[] for _ in range(nj)]
-    for j, p in enumerate(parents):
-        if p >= 0:
-            children[p].append(j)
-    # kept: weighted, or with a weighted descendant (bottom-up)
-    keep = weighted.copy()
-    order = _joint_order(parents)
-    for j in order[::-1]:
-        if parents[j] >= 0 and keep[j]:
-            keep[parents[j]] = True
-    # unweighted roots with a single kept child are dropped, repeatedly
-    root = parents.copy()
-    changed = True
-    while changed:
-        changed = False
-        for j in range(nj):
-            if keep[j] and not weighted[j] and (root[j] < 0 or not keep[root[j]]):
-                kids = [c for c in children[j] if keep[c]]
-                if len(kids) == 1:
-                    keep[j] = False
-                    changed = True
-    kparent = np.array([p if p >= 0 and keep[p] else -1 for p in parents], np.int64)
-    scale = float(np.ptp(X, axis=0).max()) if len(X) else 1.0
-    centres = np.zeros((nj, 3))
-    for j in np.flatnonzero(weighted):
-        centres[j] = W[:, j] @ X / mass[j]
-    joints = [P[j] for j in range(nj)]
-    joint_of = list(range(nj))
-    bones, names_out, carrier = [], [], {}
-    for j in order:
-        if not keep[j]:
-            continue
-        kids = [c for c in children[j] if keep[c]]
-        for c in kids:
-            bones.append((j, c))
-        if weighted[j]:
-            if kids:
-                seg = [_point_segment_distance(centres[j], P[j], P[c]) for c in kids]
-                carrier[j] = len(bones) - len(kids) + int(np.argmin(seg))
-            else:  # weighted leaf: a bone of its own, as far as its skin reaches
-                direction = centres[j] - P[j]
-                if np.linalg.norm(direction) < 0.02 * scale and kparent[j] >= 0:
-                    direction = P[j] - P[kparent[j]]
-                if np.linalg.norm(direction) < 1e-12 * scale:
-                    direction = np.array([0.0, 1.0, 0.0])
-                direction /= np.linalg.norm(direction)
-                region = W[:, j] >= 0.5 * W[:, j].max()
-                reach = float(np.max((X[region] - P[j]) @ direction)) if np.any(region) else 0.0
-                length = max(reach, 0.02 * scale)
-                joints.append(P[j] + length * direction)
-                joint_of.append(-1)
-                bones.append((j, len(joints) - 1))
-                carrier[j] = len(bones) - 1
-    B = np.asarray(bones, np.int64).reshape(-1, 2)
-    if len(B) == 0:
-        raise InputError(None, "the skeleton has no bone that carries weight")
-    # renumber joints to the kept ones
-    used = np.unique(B)
-    remap = -np.ones(len(joints), np.int64)
-    remap[used] = np.arange(len(used))
-    Jout = np.asarray(joints)[used]
-    Bout = remap[B]
-    jof = np.asarray(joint_of, np.int64)[used]
-    Wb = np.zeros((len(X), len(B)))
-    for j, b in carrier.items():
-        Wb[:, b] += W[:, j]
-    s = Wb.sum(1, keepdims=True)
-    Wb /= np.where(s > 0, s, 1.0)
-    bone_names = []
-    owner = {b: j for j, b in carrier.items()}
-    for b, (a, c) in enumerate(B):
-        if b in owner:
-            bone_names.append(names[owner[b]])
-        else:
-            bone_names.append(f"{names[a]}>{names[c]}" if c < nj else f"{names[a]}>tip")
-    # driver: a joint's own bone; joints without one follow their parent's
-    driver = np.full(nj, -1, np.int64)
-    incoming = {int(c): b for b, (a, c) in enumerate(B) if c < nj}
-    for j in order:
-        if j in carrier:
-            driver[j] = carrier[j]
-        elif j in incoming:
-            driver[j] = incoming[j]
-        elif parents[j] >= 0:
-            driver[j] = driver[parents[j]]
-    pruned = [names[j] for j in range(nj) if not keep[j]]
-    return RigSkeleton(Jout, Bout, bone_names, Wb, jof, driver, pruned)
+    from .joints import skeleton_from_joints
+    from .printbody import print_body
 
-
-def _joint_order(parents: np.ndarray) -> np.ndarray:
-    """Joints with parents before children."""
-    depth = np.zeros(len(parents), np.int64)
-    for j in range(len(parents)):
-        d, p = 0, parents[j]
-        while p >= 0:
-            d, p = d + 1, parents[p]
-        depth[j] = d
-    return np.argsort(depth, kind="stable")
-
-
-def _point_segment_distance(x, a, b) -> float:
-    ab = b - a
-    t = np.clip((x - a) @ ab / max(ab @ ab, 1e-300), 0.0, 1.0)
-    return float(np.linalg.norm(x - (a + t * ab)))
+    say = progress or (lambda msg: None)
+    say("reading the glTF skin")
+    skin = read_gltf_skin(path)
+    say("making the print body")
+    try:
+        body = print_body(skin.vertices, skin.faces, skin.part, skin.weights, skin.part_names)
+    except InputError as exc:
+        raise InputError(path, exc.reason) from None
+    try:
+        sk = skeleton_from_joints(skin.joint_positions, skin.joint_parents, body.values, skin.joint_names,
+                                  body.vertices)
+    except InputError as exc:
+        raise InputError(path, exc.reason) from None
+    log = list(skin.notes) + list(body.log)
+    kept = len(skin.joint_names) - len(sk.pruned)
+    log.append(f"skeleton: {len(sk.bones)} bones from {kept} of {len(skin.joint_names)} joints"
+               + (f"; pruned {len(sk.pruned)} without weight: {', '.join(sk.pruned[:12])}"
+                  + (" ..." if len(sk.pruned) > 12 else "") if sk.pruned else ""))
+    scale = METRES_TO_MM
+    source = {"path": str(path), "scale": scale, "joint_nodes": skin.joint_nodes.tolist(),
+              "driver": sk.driver.tolist(), "log": log}
+    return body.vertices * scale, body.faces, sk.joints * scale, sk.bones, sk.weights, sk.names, source
 
 
 # --------------------------------------------------------------------------- #
@@ -662,7 +558,7 @@ def posed_joint_transforms(bone_transforms: np.ndarray, driver: np.ndarray, scal
     bone_transforms : (m, 3, 4) float64
         ``[A | t]`` per bone in the rig's frame (file units times ``scale``).
     driver : (J,) int64
-        The bone each skin joint follows (:attr:`RigSkeleton.driver`), -1 for
+        The bone each skin joint follows (:attr:`~supportless.joints.RigSkeleton.driver`), -1 for
         none (it only takes ``offset``).
     scale : float
         Rig units per file unit.
@@ -713,7 +609,7 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
     locals_ = np.array([node_local(n) for n in doc.nodes])
     new_global = {int(j): np.asarray(T) @ skin.bind_globals[int(j)] for j, T in zip(joint_nodes, joint_transforms)}
     G = np.full_like(locals_, np.nan)
-    for i in _joint_order(parents):
+    for i in joint_order(parents):
         p = parents[i]
         if i in new_global:
             G[i] = new_global[i]

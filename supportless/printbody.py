@@ -259,7 +259,7 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
     log.append(f"{len(shells) + len([d for d in dropped if 'not manifold' in d])} shells: closed {loops_filled} "
                f"holes in {shells_closed} open shells; {len(keep)} kept"
                + (f", dropped {len(dropped)}: " + _grouped(dropped) if dropped else "")
-               + f" (volume of the closed shells {closed_volume:.4g})")
+               + f" (volume of the closed shells {closed_volume:.4g}, input units³)")
 
     # 4: the union of all shells
     union = manifold3d.Manifold.batch_boolean([s for _, s, _ in keep], manifold3d.OpType.Add) if len(keep) > 1 \
@@ -402,12 +402,34 @@ def _bridge(solid, gap: float):
         cloud = np.vstack([near_q, near_main])
         if len(cloud) < 4 or np.linalg.matrix_rank(cloud - cloud.mean(0), tol=1e-9 * gap) < 3:
             continue
-        hull = manifold3d.Manifold.hull_points(np.ascontiguousarray(cloud, np.float32))
-        if not hull.is_empty():
+        hull = _hull(cloud)
+        if hull is not None:
             bridges.append(hull)
     if not bridges:
         return solid, 0
     return manifold3d.Manifold.batch_boolean([solid] + bridges, manifold3d.OpType.Add), len(bridges)
+
+
+def _hull(points: np.ndarray):
+    """The convex hull of points as a manifold, in float64 (float32 rounding could open the gap again)."""
+    import manifold3d
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        hull = ConvexHull(points)
+    except QhullError:
+        return None
+    F = hull.simplices.astype(np.int64)
+    centre = points[hull.vertices].mean(0)
+    a, b, c = points[F[:, 0]], points[F[:, 1]], points[F[:, 2]]
+    inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), a - centre) < 0
+    F[inward] = F[inward][:, ::-1]
+    used = np.unique(F)
+    remap = np.full(len(points), -1, np.int64)
+    remap[used] = np.arange(len(used))
+    solid = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.ascontiguousarray(points[used], np.float64),
+                                                  tri_verts=np.ascontiguousarray(remap[F], np.uint64)))
+    return None if solid.status() != manifold3d.Error.NoError or solid.is_empty() else solid
 
 
 def transfer_values(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, values: np.ndarray) -> np.ndarray:

@@ -29,8 +29,7 @@ from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 
-__all__ = ["Rig", "compute_weights", "default_cache_dir", "load_gltf_arrays", "load_rig", "prepare_rig",
-           "rig_cache_key"]
+__all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
 CACHE_VERSION = 4
@@ -477,7 +476,10 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
             raise InputError(mesh_path, f"skin weights are {Ws.shape[0]}x{Ws.shape[1]} for {len(V)} vertices "
                              f"and {len(B)} bones")
         say("tetrahedralising")
-        TV, TT = tetrahedralize_surface(V, F)
+        TV, TT, conforming = tetrahedralize_surface(V, F)
+        if not conforming:
+            warnings = list(warnings) + ["TetGen could not keep the surface as it is; the volume mesh splits it "
+                                         "(distortion is measured on that mesh)"]
     elif tet_mesh is not None:
         TV, TT = (np.asarray(a) for a in tet_mesh)
         TV, TT, tet_order = _attach_surface(V, TV.astype(np.float64), TT.astype(np.int64), mesh_path)
@@ -566,7 +568,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     model : str or os.PathLike
         Surface mesh file (OBJ, STL, PLY, OFF, 3MF, GLB), a rigged glTF/GLB
         asset (with no ``skeleton``: its skin is read, see
-        :func:`load_gltf_arrays`), or ``"demo:NAME"`` for a built-in figure
+        :func:`~supportless.gltf.load_gltf_character`), or ``"demo:NAME"`` for a built-in figure
         (then ``skeleton`` is not needed).
     skeleton : str or os.PathLike
         TGF skeleton. Defaults to the model's path with ``.tgf``.
@@ -593,7 +595,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     -------
     rig : Rig
     """
-    from .gltf import is_gltf
+    from .gltf import is_gltf, load_gltf_character
 
     surface_weights = labels = source = None
     if isinstance(model, str) and model.startswith("demo:"):
@@ -608,7 +610,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
             raise InputError(weights, "a glTF model takes --weights skin (its own, the default) or --weights bbw")
         if tets is not None:
             raise InputError(tets, "--tets does not go with a glTF model's skin; leave it out")
-        V, F, J, B, surface_weights, labels, source = load_gltf_arrays(mesh_path, progress=progress)
+        V, F, J, B, surface_weights, labels, source = load_gltf_character(mesh_path, progress=progress)
         if weights == "bbw":
             surface_weights = None
         weights = None
@@ -692,60 +694,3 @@ def _read_cached(file: Path, name: str) -> Rig:
         warnings = [str(w) for w in data["warnings"]]
         labels = [str(x) for x in data["labels"]] if bool(data["has_labels"]) else None
     return Rig(**arrays, name=name, info={"warnings": warnings}, labels=labels)
-
-
-def load_gltf_arrays(path, progress=None):
-    """The print body, bones and skin weights of a rigged glTF/GLB asset.
-
-    Reads the skin in its bind pose (:func:`~supportless.gltf.read_gltf_skin`),
-    makes the closed print body from all its parts with the weights carried
-    along (:func:`~supportless.printbody.print_body`), derives the bones from
-    the joints (:func:`~supportless.gltf.skeleton_from_joints`) and converts
-    the file's metres to millimetres.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-    progress : callable(str), optional
-
-    Returns
-    -------
-    V : (n, 3) float64
-        Print body, millimetres, +Y up.
-    F : (f, 3) int64
-    J : (j, 3) float64
-    B : (m, 2) int64
-    W : (n, m) float64
-        Skin weights per bone, rows summing to 1.
-    labels : list of str
-        Bone names after the joints.
-    source : dict
-        ``path``, ``scale`` (file units to the rig's), ``joint_nodes``,
-        ``driver`` (bone each skin joint follows) and ``log`` (one line per
-        step), for writing the posed asset and for the report.
-    """
-    from .gltf import METRES_TO_MM, read_gltf_skin, skeleton_from_joints
-    from .printbody import print_body
-
-    say = progress or (lambda msg: None)
-    say("reading the glTF skin")
-    skin = read_gltf_skin(path)
-    say("making the print body")
-    try:
-        body = print_body(skin.vertices, skin.faces, skin.part, skin.weights, skin.part_names)
-    except InputError as exc:
-        raise InputError(path, exc.reason) from None
-    try:
-        sk = skeleton_from_joints(skin.joint_positions, skin.joint_parents, body.values, skin.joint_names,
-                                  body.vertices)
-    except InputError as exc:
-        raise InputError(path, exc.reason) from None
-    log = list(skin.notes) + list(body.log)
-    kept = len(skin.joint_names) - len(sk.pruned)
-    log.append(f"skeleton: {len(sk.bones)} bones from {kept} of {len(skin.joint_names)} joints"
-               + (f"; pruned {len(sk.pruned)} without weight: {', '.join(sk.pruned[:12])}"
-                  + (" ..." if len(sk.pruned) > 12 else "") if sk.pruned else ""))
-    scale = METRES_TO_MM
-    source = {"path": str(path), "scale": scale, "joint_nodes": skin.joint_nodes.tolist(),
-              "driver": sk.driver.tolist(), "log": log}
-    return body.vertices * scale, body.faces, sk.joints * scale, sk.bones, sk.weights, sk.names, source

@@ -87,11 +87,17 @@ def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints
 
 
 def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
-                           flags: str = TETGEN_FLAGS) -> tuple[np.ndarray, np.ndarray]:
+                           flags: str = TETGEN_FLAGS) -> tuple[np.ndarray, np.ndarray, bool]:
     """Tetrahedralise the inside of a closed surface (no bones inside).
 
-    For rigs whose weights come with the model (a glTF skin), where the bones
-    only give pivots and need not lie inside.
+    For rigs whose weights come with the model (a glTF skin): the bones only
+    give pivots and need not lie inside, and the weights of the volume come
+    from the surface, so the volume mesh need not share the surface's
+    vertices. TetGen is first asked to keep the surface as it is; when it
+    cannot (points of a boolean union closer than its tolerance, nearly
+    overlapping segments), its volume mesh is used as it came (or the surface
+    is meshed free to split, then without quality refinement), and the surface
+    vertices are put first as vertices of no tetrahedron.
 
     Parameters
     ----------
@@ -99,30 +105,43 @@ def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
         Closed, manifold, outward-oriented surface (several solids allowed).
     faces : (f, 3) int64
     flags : str
-        TetGen switches; ``Y`` must stay so the surface is kept as given.
+        TetGen switches of the first try; ``Y`` must stay.
 
     Returns
     -------
     tet_vertices : (t, 3) float64
         The first ``n`` rows are ``vertices`` unchanged.
     tets : (k, 4) int64
+    conforming : bool
+        Whether the tetrahedra have the surface's vertices and faces (the first
+        try worked).
     """
     import igl
     import igl.copyleft.tetgen  # noqa: F401  (registers the submodule)
 
     V = np.ascontiguousarray(vertices, np.float64)
     F = np.ascontiguousarray(faces, np.int64)
-    try:
-        with _silence_stdout():
-            out = igl.copyleft.tetgen.tetrahedralize(V, F, flags=flags)
-    except RuntimeError as exc:
-        raise InputError(None, f"TetGen could not tetrahedralise the surface ({exc}); "
-                         "check it is closed and free of self-intersections") from None
-    TV, TT = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
-    if len(TT) == 0 or len(TV) < len(V) or not np.array_equal(TV[: len(V)], V):
-        raise InputError(None, "TetGen could not tetrahedralise the surface without changing it; "
-                         "the surface may self-intersect")
-    return TV, TT
+
+    def run(switches):
+        try:
+            with _silence_stdout():
+                out = igl.copyleft.tetgen.tetrahedralize(V, F, flags=switches)
+        except RuntimeError:
+            return None
+        TV, TT = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
+        return (TV, TT) if len(TT) else None
+
+    first = run(flags)
+    if first is not None and len(first[0]) >= len(V) and np.array_equal(first[0][: len(V)], V):
+        return first[0], first[1], True
+    # TetGen dropped or moved points (it ignores points it takes as coincident), or failed: use its
+    # volume mesh as it is, else try with the surface free to split, then without quality refinement
+    free = first or run(flags.replace("Y", "")) or run("pQ")
+    if free is None:
+        raise InputError(None, "TetGen could not tetrahedralise the surface; check it is closed and free of "
+                         "self-intersections")
+    TV, TT = free
+    return np.vstack([V, TV]), TT + len(V), False
 
 
 def refine_triangulation_with_points(vertices: np.ndarray, faces: np.ndarray,

@@ -1,0 +1,121 @@
+"""Real rigged glTF characters end to end, measured with PrusaSlicer.
+
+For each shared glTF asset (``../shared/data/gltf/*.glb``): what each repair
+step did to make the print body, the preparation time (cold cache), the
+default search (200 x 120, print orientation free) and PrusaSlicer's support
+filament for the rest print body standing against the result as printed, both
+60 mm tall (PrusaSlicer's default profile). Pictures of each result go to
+``docs/gltf-NAME.png`` (the found pose standing and as printed). Prints a
+Markdown section and, with ``--out``, writes it as the "## glTF characters"
+section of that file.
+
+    python benchmarks/gltf.py [--models Fox RobotExpressive] [--out benchmarks/RESULTS.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import supportless as sl
+from models import DATA
+from supportless.report import build_report, write_pictures
+from supportless.slicer import slice_check
+
+HEADING = "## glTF characters"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(path: Path, cache_dir: str) -> dict:
+    """Prepare, search and slice one asset; returns the figures of one table row."""
+    t0 = time.perf_counter()
+    rig = sl.load_rig(path, cache_dir=cache_dir, height_mm=60.0)
+    prepare_s = time.perf_counter() - t0
+    result = sl.optimize(rig)
+    report = build_report(rig, result)
+    sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
+                         height_mm=60.0).to_dict()
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, file in write_pictures(tmp, rig, result, report):
+            if Path(file).name == "print.png":
+                shutil.copy(file, ROOT / "docs" / f"gltf-{path.stem}.png")
+    before = report["before"]
+    after = report["after"]
+    return {
+        "name": path.stem, "log": rig.info["gltf"]["log"], "faces": len(rig.faces), "bones": rig.bone_count,
+        "free": int((~sl.SearchSettings().fixed_bones(rig)).sum()), "tets": len(rig.tets),
+        "prepare_s": prepare_s, "search_s": result.runtime_seconds,
+        "prism": (before["support_prism"], after["support_prism"]),
+        "slicer": (sliced["before"]["support_mm"], sliced["after"]["support_mm"]),
+        "pairs": after.get("intersecting_face_pairs"), "stands": after.get("stands"),
+        "turn": report["print_rotation"]["angle_deg"], "largest": report["largest_rotation_deg"],
+    }
+
+
+def section(rows: list[dict], argv: list[str]) -> str:
+    lines = [
+        HEADING, "",
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores. Default settings (200 x 120, `--orient free`), "
+        "skin weights from the file, the print body scaled to 60 mm tall; PrusaSlicer default profile, support "
+        "filament of the rest print body standing against the result as printed. Preparation with a cold cache.",
+        "Command: `python benchmarks/gltf.py " + " ".join(argv) + "`", "",
+        "| model | faces / tets | bones (free) | prepare | search | prism estimate | PrusaSlicer support | "
+        "turned | largest joint turn | exact pairs / stands |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        (pb, pa), (sb, sa) = r["prism"], r["slicer"]
+        lines.append(
+            f"| {r['name']} | {r['faces']} / {r['tets']} | {r['bones']} ({r['free']}) | {r['prepare_s']:.1f} s | "
+            f"{r['search_s']:.1f} s | {pb:.0f} → {pa:.0f} ({(1 - pa / pb) * 100:.1f} % less) | "
+            f"{sb:.0f} → {sa:.0f} mm ({(1 - sa / sb) * 100:.1f} % less) | {r['turn']:.0f}° | "
+            f"{r['largest']:.0f}° | {r['pairs']} / {'yes' if r['stands'] else 'no'} |")
+    lines.append("")
+    for r in rows:
+        lines.append(f"What was done to {r['name']} (one line per step):")
+        lines.append("")
+        lines += [f"- {line}" for line in r["log"]]
+        lines.append("")
+        lines.append(f"![{r['name']}](../docs/gltf-{r['name']}.png)")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="+", default=None)
+    p.add_argument("--out", default=None, help="Write the section into this Markdown file.")
+    args = p.parse_args(argv)
+    folder = DATA / "gltf"
+    names = args.models or sorted(f.stem for f in folder.glob("*.glb"))
+    rows = []
+    with tempfile.TemporaryDirectory() as cache:
+        for name in names:
+            t0 = time.perf_counter()
+            rows.append(run(folder / f"{name}.glb", cache))
+            r = rows[-1]
+            print(f"{name}: slicer {r['slicer'][0]:.0f} -> {r['slicer'][1]:.0f} mm, search {r['search_s']:.1f} s "
+                  f"({time.perf_counter() - t0:.0f} s)", file=sys.stderr, flush=True)
+    text = section(rows, argv)
+    print(text)
+    if args.out:
+        path = Path(args.out)
+        old = path.read_text() if path.is_file() else ""
+        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
+        new = pattern.sub(lambda _: text + "\n", old) if pattern.search(old) else old.rstrip() + "\n\n" + text + "\n"
+        path.write_text(new)
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    main()

@@ -1,0 +1,194 @@
+"""Bones from a joint hierarchy: which joints to keep, which bone carries each joint's weight.
+
+A rigged asset names joints (glTF nodes with a parent); the search rotates
+bones (pairs of joints). :func:`skeleton_from_joints` makes the bones and moves
+the skin weights from joints onto them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+
+__all__ = ["RigSkeleton", "joint_order", "skeleton_from_joints"]
+
+#: A joint carries weight when its total weight is above this fraction of the
+#: total over all joints (one vertex in 10^7 with full weight).
+WEIGHT_EPS = 1e-7
+
+
+# --------------------------------------------------------------------------- #
+@dataclass
+class RigSkeleton:
+    """The bones derived from a joint hierarchy (:func:`skeleton_from_joints`).
+
+    Attributes
+    ----------
+    joints : (k, 3) float64
+        Kept joints, then one added tip per weighted leaf.
+    bones : (m, 2) int64
+        ``[root, tip]`` rows into ``joints``.
+    names : list of str
+        Per bone: the joint whose weight it carries, or ``"PARENT>CHILD"`` for a
+        bone that carries none.
+    weights : (n, m) float64
+        The skin weights moved from joints to bones; rows sum to 1.
+    joint_of : (k,) int64
+        The skin joint (column of :attr:`GltfSkin.weights`) of each row of
+        ``joints``, -1 for an added tip.
+    driver : (J,) int64
+        For every skin joint, the bone whose motion it follows when posed.
+    pruned : list of str
+        Names of the joints left out.
+    """
+
+    joints: np.ndarray
+    bones: np.ndarray
+    names: list
+    weights: np.ndarray
+    joint_of: np.ndarray
+    driver: np.ndarray
+    pruned: list
+
+
+def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np.ndarray, names: list,
+                         vertices: np.ndarray) -> RigSkeleton:
+    """Bones from a joint hierarchy and its skin weights.
+
+    A bone per kept parent→child pair. Joints with no weight on them or below
+    them are pruned (IK and pole targets, ``*_end`` tips); so is a chain of
+    unweighted roots above the first joint that joins weighted parts (a
+    ``_rootJoint`` on the floor). A weighted leaf gets a bone of its own,
+    towards the centre of the skin it carries (along its parent's direction
+    when that centre is at the joint), as long as that skin reaches. Each
+    joint's weight goes to the bone that starts at it and passes nearest the
+    centre of its skin; a bone that starts at a joint but carries none of its
+    weight (a hip's second child) carries no weight.
+
+    Parameters
+    ----------
+    positions : (J, 3) float64
+    parents : (J,) int64
+        -1 for a root.
+    weights : (n, J) float64
+    names : list of str, length J
+    vertices : (n, 3) float64
+
+    Returns
+    -------
+    skeleton : RigSkeleton
+    """
+    P = np.asarray(positions, np.float64)
+    parents = np.asarray(parents, np.int64)
+    W = np.asarray(weights, np.float64)
+    X = np.asarray(vertices, np.float64)
+    nj = len(P)
+    mass = W.sum(0)
+    weighted = mass > WEIGHT_EPS * max(mass.sum(), 1e-300)
+    children: list[list[int]] = [[] for _ in range(nj)]
+    for j, p in enumerate(parents):
+        if p >= 0:
+            children[p].append(j)
+    # kept: weighted, or with a weighted descendant (bottom-up)
+    keep = weighted.copy()
+    order = joint_order(parents)
+    for j in order[::-1]:
+        if parents[j] >= 0 and keep[j]:
+            keep[parents[j]] = True
+    # unweighted roots with a single kept child are dropped, repeatedly
+    root = parents.copy()
+    changed = True
+    while changed:
+        changed = False
+        for j in range(nj):
+            if keep[j] and not weighted[j] and (root[j] < 0 or not keep[root[j]]):
+                kids = [c for c in children[j] if keep[c]]
+                if len(kids) == 1:
+                    keep[j] = False
+                    changed = True
+    kparent = np.array([p if p >= 0 and keep[p] else -1 for p in parents], np.int64)
+    scale = float(np.ptp(X, axis=0).max()) if len(X) else 1.0
+    centres = np.zeros((nj, 3))
+    for j in np.flatnonzero(weighted):
+        centres[j] = W[:, j] @ X / mass[j]
+    joints = [P[j] for j in range(nj)]
+    joint_of = list(range(nj))
+    bones, carrier = [], {}
+    for j in order:
+        if not keep[j]:
+            continue
+        kids = [c for c in children[j] if keep[c]]
+        for c in kids:
+            bones.append((j, c))
+        if weighted[j]:
+            if kids:
+                seg = [_point_segment_distance(centres[j], P[j], P[c]) for c in kids]
+                carrier[j] = len(bones) - len(kids) + int(np.argmin(seg))
+            else:  # weighted leaf: a bone of its own, as far as its skin reaches
+                direction = centres[j] - P[j]
+                if np.linalg.norm(direction) < 0.02 * scale and kparent[j] >= 0:
+                    direction = P[j] - P[kparent[j]]
+                if np.linalg.norm(direction) < 1e-12 * scale:
+                    direction = np.array([0.0, 1.0, 0.0])
+                direction /= np.linalg.norm(direction)
+                region = W[:, j] >= 0.5 * W[:, j].max()
+                reach = float(np.max((X[region] - P[j]) @ direction)) if np.any(region) else 0.0
+                length = max(reach, 0.02 * scale)
+                joints.append(P[j] + length * direction)
+                joint_of.append(-1)
+                bones.append((j, len(joints) - 1))
+                carrier[j] = len(bones) - 1
+    B = np.asarray(bones, np.int64).reshape(-1, 2)
+    if len(B) == 0:
+        raise InputError(None, "the skeleton has no bone that carries weight")
+    # renumber joints to the kept ones
+    used = np.unique(B)
+    remap = -np.ones(len(joints), np.int64)
+    remap[used] = np.arange(len(used))
+    Jout = np.asarray(joints)[used]
+    Bout = remap[B]
+    jof = np.asarray(joint_of, np.int64)[used]
+    Wb = np.zeros((len(X), len(B)))
+    for j, b in carrier.items():
+        Wb[:, b] += W[:, j]
+    s = Wb.sum(1, keepdims=True)
+    Wb /= np.where(s > 0, s, 1.0)
+    bone_names = []
+    owner = {b: j for j, b in carrier.items()}
+    for b, (a, c) in enumerate(B):
+        if b in owner:
+            bone_names.append(names[owner[b]])
+        else:
+            bone_names.append(f"{names[a]}>{names[c]}" if c < nj else f"{names[a]}>tip")
+    # driver: a joint's own bone; joints without one follow their parent's
+    driver = np.full(nj, -1, np.int64)
+    incoming = {int(c): b for b, (a, c) in enumerate(B) if c < nj}
+    for j in order:
+        if j in carrier:
+            driver[j] = carrier[j]
+        elif j in incoming:
+            driver[j] = incoming[j]
+        elif parents[j] >= 0:
+            driver[j] = driver[parents[j]]
+    pruned = [names[j] for j in range(nj) if not keep[j]]
+    return RigSkeleton(Jout, Bout, bone_names, Wb, jof, driver, pruned)
+
+
+def joint_order(parents: np.ndarray) -> np.ndarray:
+    """Joints with parents before children."""
+    depth = np.zeros(len(parents), np.int64)
+    for j in range(len(parents)):
+        d, p = 0, parents[j]
+        while p >= 0:
+            d, p = d + 1, parents[p]
+        depth[j] = d
+    return np.argsort(depth, kind="stable")
+
+
+def _point_segment_distance(x, a, b) -> float:
+    ab = b - a
+    t = np.clip((x - a) @ ab / max(ab @ ab, 1e-300), 0.0, 1.0)
+    return float(np.linalg.norm(x - (a + t * ab)))
