@@ -403,12 +403,19 @@ def skin(M: np.ndarray, transforms: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    M : (n, m*(d+1)) float64
-        From :func:`lbs_matrix`.
+    M : (n, m*(d+1)) float64 array or scipy.sparse matrix
+        From :func:`lbs_matrix` (a sparse copy is faster when each vertex
+        follows a few bones, as :attr:`supportless.rig.Rig.lbs` keeps it).
     transforms : (P, m, d, d+1) or (m, d, d+1) float64
 
     Returns
     -------
     vertices : (P, n, d) or (n, d) float64
     """
-    return np.matmul(M, stack_transforms(transforms))
+    T = stack_transforms(transforms)
+    if T.ndim == 2:
+        return np.asarray(M @ T)
+    # one product with the poses side by side, (n, k) @ (k, P d): a wide product instead of P thin ones
+    P, k, d = T.shape
+    out = np.asarray(M @ np.ascontiguousarray(T.transpose(1, 0, 2)).reshape(k, P * d))
+    return np.ascontiguousarray(out.reshape(M.shape[0], P, d).transpose(1, 0, 2))

@@ -28,6 +28,7 @@ from .energies.balance import centre_of_mass_operator
 from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .weights import BBW_ITERATIONS, compute_weights
 
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
@@ -48,9 +49,8 @@ JOINT_INSIDE_MARGIN = 0.005
 #: point rest on the build plate (:attr:`Rig.contact_vertices`).
 CONTACT_TOLERANCE = 0.01
 
-#: Default settings of the weight computation.
+#: Default settings of the weight computation (and :data:`~supportless.weights.BBW_ITERATIONS`).
 SAMPLES_PER_BONE = 10
-BBW_ITERATIONS = 10
 
 
 @dataclass(eq=False)
@@ -175,9 +175,15 @@ class Rig:
         return kin.topological_order(self.parents)
 
     @cached_property
-    def lbs(self) -> np.ndarray:
-        """(n, m*(d+1)) float64: skinning matrix of the surface, ``V' = M T``."""
-        return kin.lbs_matrix(self.vertices, self.weights)
+    def lbs(self):
+        """(n, m*(d+1)) float64 scipy.sparse CSR matrix: skinning matrix of the surface, ``V' = M T``.
+
+        Sparse: a vertex follows a few bones (a glTF skin: at most 4 to 8), and
+        even bounded biharmonic weights are zero on about half the bones.
+        """
+        from scipy.sparse import csr_matrix
+
+        return csr_matrix(kin.lbs_matrix(self.vertices, self.weights))
 
     @property
     def bone_count(self) -> int:
@@ -188,6 +194,17 @@ class Rig:
         if self.labels is not None:
             return list(self.labels)
         return [f"bone {i + 1} ({a + 1}-{b + 1})" for i, (a, b) in enumerate(self.bones)]
+
+    @cached_property
+    def moved_share(self) -> np.ndarray:
+        """(m,) float64: the share of the volume that turning each bone moves (its weights and its descendants').
+
+        Sums to more than 1 over the bones: a bone's share includes its
+        children's. A finger moves a sliver of the body, an upper arm the arm
+        and the hand.
+        """
+        share = self.mass_moments[:, -1] / max(float(self.mass_moments[:, -1].sum()), 1e-300)
+        return np.array([share[kin.descendants(self.parents, b)].sum() for b in range(self.bone_count)])
 
     @cached_property
     def weightless_bones(self) -> np.ndarray:
@@ -371,51 +388,6 @@ def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- #
 # preparation
 # --------------------------------------------------------------------------- #
-def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarray, bones: np.ndarray,
-                    iterations: int = BBW_ITERATIONS) -> np.ndarray:
-    """Bounded biharmonic weights of a volume mesh, fixed to 1 on each bone.
-
-    Parameters
-    ----------
-    tet_vertices : (t, d) float64
-        Must have vertices exactly on the bones (see :mod:`supportless.tetmesh`).
-    tets : (k, d+1) int64
-    joints : (j, d) float64
-    bones : (m, 2) int64
-    iterations : int
-        Active-set iterations of ``igl.bbw``.
-
-    Returns
-    -------
-    weights : (t, m) float64
-        In [0, 1], rows summing to 1.
-    """
-    import igl
-
-    TV = np.ascontiguousarray(tet_vertices, np.float64)
-    TT = np.ascontiguousarray(tets, np.int64)
-    C = np.ascontiguousarray(joints, np.float64)
-    BE = np.ascontiguousarray(bones, np.int64)
-    # libigl's boundary_conditions only handles 3D points: lift planar ones to z = 0
-    lift = (lambda X: np.column_stack([X, np.zeros(len(X))])) if TV.shape[1] == 2 else (lambda X: X)
-    try:
-        b, bc = igl.boundary_conditions(lift(TV), TT, lift(C), np.zeros(0, np.int64), BE,
-                                        np.zeros((0, 2), np.int64), np.zeros((0, 3), np.int64))
-    except Exception as exc:
-        raise InputError(None, f"cannot fix weights on the bones ({exc})") from None
-    if len(bones) == 1:
-        return np.ones((len(TV), 1))
-    W = np.asarray(igl.bbw(TV, TT, np.asarray(b, np.int64), np.asarray(bc, np.float64),
-                           partition_unity=True, max_iter=iterations), np.float64)
-    W = np.clip(W, 0.0, 1.0)
-    s = W.sum(1, keepdims=True)
-    bad = s[:, 0] <= 1e-12
-    if np.any(bad):  # vertex with no influence at all: give it to the nearest bone sample
-        W[bad] = 1.0 / W.shape[1]
-        s = W.sum(1, keepdims=True)
-    return W / s
-
-
 def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples_per_bone=SAMPLES_PER_BONE,
                 bbw_iterations=BBW_ITERATIONS, tet_mesh=None, tet_weights=None, mesh_path=None,
                 skeleton_path=None, progress=None, surface_weights=None, labels=None) -> Rig:

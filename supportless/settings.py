@@ -56,6 +56,11 @@ PSO_PRESETS = {
 }
 
 
+#: Bones that move less of the volume than this share follow their parent by
+#: default (:attr:`SearchSettings.minor_share`).
+MINOR_SHARE = 0.003
+
+
 @dataclass(frozen=True)
 class SearchSettings:
     """Every setting of a pose search, with the tool's defaults.
@@ -107,6 +112,11 @@ class SearchSettings:
     support_floor : float
         Fixed cost of support however low it is: a height added to every
         prism of the estimate, as a fraction of the model's height.
+    minor_share : float
+        Bones that move less than this share of the volume when they turn
+        (:attr:`Rig.moved_share`: fingers, toes, facial joints of a game
+        character) follow their parent unless ``free``d: fewer dimensions to
+        search, and they barely change the support.
     clusters : int or None
         Rotation clusters of the reduced ARAP energy.
     resolution : int
@@ -136,6 +146,7 @@ class SearchSettings:
     orient: str = "free"
     orient_seeds: int = ORIENT_SEEDS
     support_floor: float = 0.0
+    minor_share: float = MINOR_SHARE
     clusters: int | None = 100
     resolution: int = 192
     backend: str = "fast"
@@ -216,7 +227,7 @@ class SearchSettings:
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
         """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
-        return resolve_fixed_bones(rig, self.fix, self.free) | (self.joint_limits(rig) == 0.0)
+        return resolve_fixed_bones(rig, self.fix, self.free, self.minor_share) | (self.joint_limits(rig) == 0.0)
 
     def to_dict(self) -> dict:
         """The settings as JSON-ready values, plus the derived ``search_overhang_angle``."""
@@ -235,21 +246,27 @@ class SearchSettings:
 # --------------------------------------------------------------------------- #
 # which bones the search rotates
 # --------------------------------------------------------------------------- #
-def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None) -> np.ndarray:
+def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None,
+                        minor_share: float = 0.0) -> np.ndarray:
     """Which bones keep their rest rotation during the search.
 
     By default the bones resting on the build plate and the bones joining
     them (:attr:`Rig.anchored_bones`): the parts on the plate stay where they
     are and the rest of the body moves relative to them, about the contact
-    (the rig's kinematic tree hangs from it).
+    (the rig's kinematic tree hangs from it). Also the bones no vertex is
+    weighted to (:attr:`Rig.weightless_bones`) and, with ``minor_share``, the
+    bones carrying less than that share of the volume.
 
     Parameters
     ----------
     rig : Rig
     fix, free : list of int or str, optional
         Bones to fix or free in addition to (or against) the default: 1-based
-        bone numbers as in the TGF file (ints or digit strings), or
-        ``"all"``.
+        bone numbers as in the TGF file (ints or digit strings), bone names
+        (:attr:`Rig.labels`), or ``"all"``.
+    minor_share : float
+        Fix the bones that move less than this share of the volume
+        (:attr:`Rig.moved_share`).
 
     Returns
     -------
@@ -262,6 +279,8 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
     """
     m = rig.bone_count
     fixed = rig.anchored_bones | rig.weightless_bones
+    if minor_share > 0:
+        fixed |= rig.moved_share < minor_share
     for names, value in ((fix, True), (free, False)):
         for name in names or []:
             if str(name).lower() == "all":

@@ -90,7 +90,7 @@ def test_no_module_imports_the_package_front_door():
 LAYERS = [
     {"supportless.errors", "supportless.geometry"},
     {"supportless.io", "supportless.joints", "supportless.printbody", "supportless.kinematics", "supportless.tetmesh",
-     "supportless.gltf", "supportless.shapes"},
+     "supportless.gltf", "supportless.shapes", "supportless.weights"},
     {"supportless.rig", "supportless.energies"},
     {"supportless.standing", "supportless.prior", "supportless.symmetry", "supportless.orientation"},
     {"supportless.objective"},

@@ -1,0 +1,37 @@
+"""Bounded biharmonic weights (:mod:`supportless.weights`) on a bar with two bones."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from meshes import box
+from supportless.tetmesh import tetrahedralize_with_skeleton
+from supportless.weights import compute_weights
+
+
+def test_weights_are_a_partition_of_unity_fixed_on_the_bones_and_change_along_the_bar():
+    V, F = box((0, 0, 0), (4, 1, 1))
+    J = np.array([[0.2, 0.5, 0.5], [2.0, 0.5, 0.5], [3.8, 0.5, 0.5]])
+    B = np.array([[0, 1], [1, 2]])
+    TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone=8)
+    W = compute_weights(TV, TT, J, B)
+    assert W.shape == (len(TV), 2)
+    assert W.min() >= 0.0 and W.max() <= 1.0
+    np.testing.assert_allclose(W.sum(1), 1.0, atol=1e-9)
+    # on the first bone's inner samples the first bone has it all, on the second's the second
+    on_first = (np.abs(TV[:, 1] - 0.5) < 1e-9) & (np.abs(TV[:, 2] - 0.5) < 1e-9) & (TV[:, 0] > 0.3) & (TV[:, 0] < 1.8)
+    on_second = (np.abs(TV[:, 1] - 0.5) < 1e-9) & (np.abs(TV[:, 2] - 0.5) < 1e-9) & (TV[:, 0] > 2.2) & (TV[:, 0] < 3.7)
+    assert on_first.any() and on_second.any()
+    np.testing.assert_allclose(W[on_first, 0], 1.0, atol=1e-6)
+    np.testing.assert_allclose(W[on_second, 1], 1.0, atol=1e-6)
+    # the surface ends belong to their bones
+    assert W[TV[:, 0] < 0.01, 0].min() > 0.9
+    assert W[TV[:, 0] > 3.99, 1].min() > 0.9
+
+
+def test_one_bone_has_all_the_weight():
+    V, F = box((0, 0, 0), (2, 1, 1))
+    J = np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]])
+    B = np.array([[0, 1]])
+    TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone=4)
+    np.testing.assert_array_equal(compute_weights(TV, TT, J, B), np.ones((len(TV), 1)))
