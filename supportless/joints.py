@@ -19,6 +19,10 @@ __all__ = ["RigSkeleton", "joint_order", "skeleton_from_joints"]
 #: total over all joints (one vertex in 10^7 with full weight).
 WEIGHT_EPS = 1e-7
 
+#: A weighted leaf's bone reaches this fraction of the way to the farthest
+#: point of its skin (inside it, so bones can be sampled into a volume mesh).
+LEAF_REACH = 0.9
+
 
 # --------------------------------------------------------------------------- #
 @dataclass
@@ -63,7 +67,7 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
     unweighted roots above the first joint that joins weighted parts (a
     ``_rootJoint`` on the floor). A weighted leaf gets a bone of its own,
     towards the centre of the skin it carries (along its parent's direction
-    when that centre is at the joint), as long as that skin reaches. Each
+    when that centre is at the joint), nearly as far as that skin reaches (:data:`LEAF_REACH`). Each
     joint's weight goes to the bone that starts at it and passes nearest the
     centre of its skin; a bone that starts at a joint but carries none of its
     weight (a hip's second child) carries no weight.
@@ -136,7 +140,7 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
                 direction /= np.linalg.norm(direction)
                 region = W[:, j] >= 0.5 * W[:, j].max()
                 reach = float(np.max((X[region] - P[j]) @ direction)) if np.any(region) else 0.0
-                length = max(reach, 0.02 * scale)
+                length = max(LEAF_REACH * reach, 0.02 * scale)  # inside the skin, not on it
                 joints.append(P[j] + length * direction)
                 joint_of.append(-1)
                 bones.append((j, len(joints) - 1))

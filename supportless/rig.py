@@ -265,7 +265,7 @@ def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
     return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
 
 
-def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joints_inside=True):
+def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joints_inside=True, pivots_only=False):
     """Validate and normalise arrays; returns (V, F, joints, dim, warnings)."""
     if len(bones) == 0:
         raise InputError(skel_path, "skeleton has no bones")
@@ -292,12 +292,16 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         F = F[:, ::-1].copy()
     if not joints_inside:  # the weights come with the model: joints are only pivots
         return V, F, joints, 3, []
-    joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
+    if pivots_only:  # a glTF rig's joints, weights recomputed: every one goes inside, from however far
+        joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path, np.inf, JOINT_INSIDE_MARGIN)
+    else:
+        joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
     return V, F, joints, 3, warnings
 
 
 def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,
-                       path=None) -> tuple[np.ndarray, list[str]]:
+                       path=None, tolerance: float = JOINT_OUTSIDE_TOLERANCE,
+                       within: float = 0.0) -> tuple[np.ndarray, list[str]]:
     """Move joints that lie just outside a closed surface inside it, along one of their bones.
 
     Real skeletons put tips (fingertips, toe tips, the top of the head, a root
@@ -319,6 +323,11 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
         Printing direction (the height is measured along it).
     path : str or os.PathLike, optional
         The skeleton file, named in errors.
+    tolerance : float
+        How far outside a joint may be (fraction of the height) to be moved.
+    within : float
+        Also move joints less than this deep inside (fraction of the height):
+        a glTF rig's joints on the skin, for bones sampled into the volume.
 
     Returns
     -------
@@ -340,13 +349,13 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
     if height <= 0:
         height = float(np.ptp(V, axis=0).max())
     depth = -np.asarray(igl.signed_distance(joints, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
-    outside = np.flatnonzero(depth < 0)
-    far = outside[-depth[outside] > JOINT_OUTSIDE_TOLERANCE * height]
+    outside = np.flatnonzero(depth < within * height)
+    far = outside[-depth[outside] > tolerance * height]
     if len(far):
         i = int(far[np.argmin(depth[far])])
         raise InputError(path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies "
                          f"{100 * -depth[i] / height:.1f} % of the model's height outside the surface "
-                         f"({len(far)} joints farther out than {100 * JOINT_OUTSIDE_TOLERANCE:g} %); "
+                         f"({len(far)} joints farther out than {100 * tolerance:g} %); "
                          "check the skeleton belongs to this model and uses the same units")
     warnings = []
     margin = JOINT_INSIDE_MARGIN * height
@@ -390,7 +399,7 @@ def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
 # --------------------------------------------------------------------------- #
 def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples_per_bone=SAMPLES_PER_BONE,
                 bbw_iterations=BBW_ITERATIONS, tet_mesh=None, tet_weights=None, mesh_path=None,
-                skeleton_path=None, progress=None, surface_weights=None, labels=None) -> Rig:
+                skeleton_path=None, progress=None, surface_weights=None, labels=None, pivots_only=False) -> Rig:
     """Build a rig from arrays: volume mesh and bounded biharmonic weights.
 
     Parameters
@@ -423,6 +432,10 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         its closest surface point (:func:`~supportless.printbody.transfer_values`).
     labels : list of str, optional
         Bone names (:attr:`Rig.labels`).
+    pivots_only : bool
+        The joints are pivots from a rigged asset (not drawn inside the body):
+        for bounded biharmonic weights every joint is moved inside, from
+        however far out.
 
     Returns
     -------
@@ -437,7 +450,8 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     J = np.asarray(joints, np.float64)
     B = np.asarray(bones, np.int64)
     skinned = surface_weights is not None
-    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned)
+    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
+                                           pivots_only=pivots_only)
     up_vec = parse_up(up, dim)
     t0 = time.perf_counter()
     if skinned:
@@ -630,9 +644,16 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
             return rig
         except Exception:  # a damaged cache entry is recomputed, never fatal
             pass
-    rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
-                      tet_mesh=tet_arrays, tet_weights=W, mesh_path=mesh_path, skeleton_path=skel_path,
-                      progress=progress, surface_weights=surface_weights, labels=labels)
+    try:
+        rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
+                          tet_mesh=tet_arrays, tet_weights=W, mesh_path=mesh_path, skeleton_path=skel_path,
+                          progress=progress, surface_weights=surface_weights, labels=labels,
+                          pivots_only=source is not None)
+    except InputError as exc:
+        if source is None or surface_weights is not None:
+            raise
+        raise InputError(mesh_path, f"{exc.reason}; with --weights bbw the bones must fit inside the body: use "
+                         "the file's own skin weights (leave --weights out)") from None
     if source is not None:
         rig.info["gltf"] = source
         rig.info["warnings"] = list(source["log"]) + list(rig.info.get("warnings", []))

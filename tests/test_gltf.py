@@ -909,3 +909,16 @@ def test_shared_asset(shared_file, tmp_path, name, bones, pruned, on_body):
     # the skinning formula (weights normalised, the robot's sum to 1.75) poses the file as the rig poses the body
     compared = check_posed_file(rig, out, angles, path, normalise=True, skin=skin, doc=after)
     assert compared >= on_body * len(skin.vertices)
+
+
+def test_weights_bbw_recomputes_weights_on_the_derived_bones(tmp_path, cache):
+    """``--weights bbw``: bounded biharmonic weights instead of the file's (the column's joints are inside)."""
+    path = write_gltf(character(), tmp_path / "column.glb")
+    skin = load(path, cache)
+    bbw = load(path, cache, weights="bbw")
+    assert skin.info["weights"] == "skin" and bbw.info["weights"] == "bbw"
+    np.testing.assert_array_equal(bbw.bones, skin.bones)
+    np.testing.assert_allclose(bbw.weights.sum(1), 1.0)
+    # the file's weights are rigid per segment; bounded biharmonic weights blend across the joints
+    assert ((skin.weights > 0) & (skin.weights < 1)).sum() < ((bbw.weights > 1e-3) & (bbw.weights < 1 - 1e-3)).sum()
+

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from supportless.errors import InputError
-from supportless.joints import joint_order, skeleton_from_joints
+from supportless.joints import LEAF_REACH, joint_order, skeleton_from_joints
 
 
 def hip_with_four_children():
@@ -56,7 +56,7 @@ def test_the_hip_weight_goes_to_the_child_bone_nearest_its_skin():
         assert sk.weights[:, b].max() == 0.0
 
 
-def test_a_weighted_leaf_gets_a_bone_as_long_as_its_skin_reaches():
+def test_a_weighted_leaf_gets_a_bone_nearly_as_long_as_its_skin_reaches():
     P, parents, names, X, W = hip_with_four_children()
     sk = skeleton_from_joints(P, parents, W, names, X)
     head = sk.names.index("head")
@@ -64,7 +64,7 @@ def test_a_weighted_leaf_gets_a_bone_as_long_as_its_skin_reaches():
     assert sk.joint_of[b] == -1  # an added tip
     region = X[W[:, 2] > 0]
     direction = (sk.joints[b] - sk.joints[a]) / np.linalg.norm(sk.joints[b] - sk.joints[a])
-    np.testing.assert_allclose(np.max((region - P[2]) @ direction), np.linalg.norm(sk.joints[b] - sk.joints[a]))
+    np.testing.assert_allclose(LEAF_REACH * np.max((region - P[2]) @ direction), np.linalg.norm(sk.joints[b] - sk.joints[a]))
 
 
 def test_every_joint_has_a_driver_bone_and_pruned_tips_follow_their_parent():
@@ -91,3 +91,17 @@ def test_joint_order_puts_parents_first():
     for j, p in enumerate(parents):
         if p >= 0:
             assert order.index(p) < order.index(j)
+
+
+def test_several_weighted_roots_make_a_forest():
+    """Two unconnected chains (a character and a separate prop): both keep their bones."""
+    P = np.array([[0, 0, 0], [0, 1, 0], [3, 0, 0], [3, 1, 0.0]])
+    parents = np.array([-1, 0, -1, 2])
+    names = ["a0", "a1", "b0", "b1"]
+    X = np.array([[0, 0.5, 0], [0, 1.5, 0], [3, 0.5, 0], [3, 1.5, 0.0]])
+    W = np.eye(4)
+    sk = skeleton_from_joints(P, parents, W, names, X)
+    assert sk.pruned == []
+    assert sorted(n for n in sk.names if ">" not in n) == names
+    roots = {tuple(sk.joints[a]) for a, _ in sk.bones} - {tuple(sk.joints[b]) for _, b in sk.bones}
+    assert roots == {(0.0, 0.0, 0.0), (3.0, 0.0, 0.0)}

@@ -177,7 +177,8 @@ def new_contact_depth(vertices: np.ndarray, up: np.ndarray, clear: np.ndarray, l
         ``max(0, level - lowest clear vertex)``: 0 when nothing new touches.
     """
     V = np.asarray(vertices, np.float64)
-    h = V[..., clear, :] @ np.asarray(up, np.float64)
+    # heights first, then the clear ones: a mask on (P, n, d) would copy every clear vertex
+    h = np.take(V @ np.asarray(up, np.float64), np.flatnonzero(clear), axis=-1)
     if h.shape[-1] == 0:
         out = np.zeros(h.shape[:-1])
     else:
