@@ -126,21 +126,24 @@ def _pct(before: float, after: float) -> str:
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| model | (1) rest mm | (2) turning only mm | (3) pose only mm | (4) pose + orientation mm "
-             "| (4) vs min((2),(3)) | (4) unseeded mm | time (3) | time (4) | time (4) unseeded "
-             "| printing direction (4) | (4) stands / new contacts |",
-             "|" + "---|" * 12]
+    unseeded = any("both_unseeded" in r for r in rows)
+    head = ["model", "(1) rest mm", "(2) turning only mm", "(3) pose only mm", "(4) pose + orientation mm",
+            "(4) vs min((2),(3))"] + (["(4) unseeded mm"] if unseeded else []) + \
+        ["time (3)", "time (4)"] + (["time (4) unseeded"] if unseeded else []) + \
+        ["printing direction (4)", "(4) stands / new contacts"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         p, b = r["pose"], r["both"]
         u = r.get("both_unseeded") or {"mm": float("nan"), "seconds": float("nan")}
         best_other = min(r["turning"], p["mm"])
-        lines.append(
-            f"| {r['model']} | {r['rest']:.0f} | {r['turning']:.0f} ({_pct(r['rest'], r['turning'])}) "
-            f"| {p['mm']:.0f} ({_pct(r['rest'], p['mm'])}) | {b['mm']:.0f} ({_pct(r['rest'], b['mm'])}) "
-            f"| {100 * (b['mm'] / best_other - 1) if best_other > 0 else 0:+.1f} % "
-            f"| {u['mm']:.0f} ({_pct(r['rest'], u['mm'])}) "
-            f"| {p['seconds']:.1f} s | {b['seconds']:.1f} s | {u['seconds']:.1f} s | {b['up']} "
-            f"| {'yes' if b['stands'] else 'NO'} / {b['new_contacts']} |")
+        cells = [r["model"], f"{r['rest']:.0f}", f"{r['turning']:.0f} ({_pct(r['rest'], r['turning'])})",
+                 f"{p['mm']:.0f} ({_pct(r['rest'], p['mm'])})", f"{b['mm']:.0f} ({_pct(r['rest'], b['mm'])})",
+                 f"{100 * (b['mm'] / best_other - 1) if best_other > 0 else 0:+.1f} %"]
+        cells += [f"{u['mm']:.0f} ({_pct(r['rest'], u['mm'])})"] if unseeded else []
+        cells += [f"{p['seconds']:.1f} s", f"{b['seconds']:.1f} s"]
+        cells += [f"{u['seconds']:.1f} s"] if unseeded else []
+        cells += [str(b["up"]), f"{'yes' if b['stands'] else 'NO'} / {b['new_contacts']}"]
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -160,7 +163,9 @@ def summary(rows: list[dict]) -> str:
     return (f"Mean reduction against (1) over {len(rows)} models: turning only {mean_red('turning'):.1f} %, "
             f"pose only {mean_red('pose'):.1f} %, pose + orientation {mean_red('both'):.1f} % "
             f"{unseeded}. (4) within 1 % of min((2), (3)) on {ok} of {len(rows)}; "
-            f"below (2) on {beats_turning}; seeded at least as good as unseeded on {seeded_better} of {len(compared)}. "
+            f"below (2) on {beats_turning}"
+            + (f"; seeded at least as good as unseeded on {seeded_better} of {len(compared)}" if compared else "")
+            + ". "
             f"Time (4) / (3): median {np.median(ratio):.2f}, largest {max(ratio):.2f}.")
 
 
