@@ -2,7 +2,9 @@
 
 A rigged asset names joints (glTF nodes with a parent); the search rotates
 bones (pairs of joints). :func:`skeleton_from_joints` makes the bones and moves
-the skin weights from joints onto them.
+the skin weights from joints onto them. :func:`pull_joints_inside` moves
+joints drawn on or just outside the skin inside it (bones are sampled into
+the volume for bounded biharmonic weights).
 """
 
 from __future__ import annotations
@@ -12,8 +14,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .geometry import parse_up
 
-__all__ = ["RigSkeleton", "joint_order", "skeleton_from_joints"]
+__all__ = ["JOINT_INSIDE_MARGIN", "JOINT_OUTSIDE_TOLERANCE", "RigSkeleton", "joint_order", "pull_joints_inside",
+           "skeleton_from_joints"]
+
+#: A joint outside the surface by at most this fraction of the model's height is
+#: moved inside (:func:`pull_joints_inside`); farther out is an error. Real tips
+#: (fingers, toes, the top of the head, a root joint on the floor) lie within
+#: about 1 % of the skin; 3 % leaves room for coarse rigs while a skeleton in
+#: other units or of another model is still refused.
+JOINT_OUTSIDE_TOLERANCE = 0.03
+
+#: How deep inside a moved joint is put, as a fraction of the model's height.
+JOINT_INSIDE_MARGIN = 0.005
 
 #: A joint carries weight when its total weight is above this fraction of the
 #: total over all joints (one vertex in 10^7 with full weight).
@@ -196,3 +210,87 @@ def _point_segment_distance(x, a, b) -> float:
     ab = b - a
     t = np.clip((x - a) @ ab / max(ab @ ab, 1e-300), 0.0, 1.0)
     return float(np.linalg.norm(x - (a + t * ab)))
+
+
+def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,
+                       path=None, tolerance: float = JOINT_OUTSIDE_TOLERANCE,
+                       within: float = 0.0) -> tuple[np.ndarray, list[str]]:
+    """Move joints that lie just outside a closed surface inside it, along one of their bones.
+
+    Real skeletons put tips (fingertips, toe tips, the top of the head, a root
+    joint on the floor) on or just outside the skin. A joint outside by at most
+    :data:`JOINT_OUTSIDE_TOLERANCE` of the model's height is moved along the
+    bone towards its deepest neighbouring joint, to the first point that lies
+    :data:`JOINT_INSIDE_MARGIN` of the height inside (or, on a part thinner
+    than that, to the deepest point of the bone's first half). Farther outside
+    is an error: such a skeleton belongs to another model or other units.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Closed, outward-oriented surface.
+    F : (f, 3) int64
+    joints : (j, 3) float64
+    bones : (m, 2) int64
+    up : str or (3,) float
+        Printing direction (the height is measured along it).
+    path : str or os.PathLike, optional
+        The skeleton file, named in errors.
+    tolerance : float
+        How far outside a joint may be (fraction of the height) to be moved.
+    within : float
+        Also move joints less than this deep inside (fraction of the height):
+        a glTF rig's joints on the skin, for bones sampled into the volume.
+
+    Returns
+    -------
+    joints : (j, 3) float64
+        A copy with the moved joints.
+    warnings : list of str
+        One line per moved joint: which joint, how far outside it was, where it went.
+
+    Raises
+    ------
+    InputError
+        A joint farther outside than the tolerance, or one that cannot be
+        moved inside along any of its bones.
+    """
+    import igl
+
+    joints = np.array(joints, np.float64)
+    height = float(np.ptp(V @ parse_up(up)))
+    if height <= 0:
+        height = float(np.ptp(V, axis=0).max())
+    depth = -np.asarray(igl.signed_distance(joints, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
+    outside = np.flatnonzero(depth < within * height)
+    far = outside[-depth[outside] > tolerance * height]
+    if len(far):
+        i = int(far[np.argmin(depth[far])])
+        raise InputError(path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies "
+                         f"{100 * -depth[i] / height:.1f} % of the model's height outside the surface "
+                         f"({len(far)} joints farther out than {100 * tolerance:g} %); "
+                         "check the skeleton belongs to this model and uses the same units")
+    warnings = []
+    margin = JOINT_INSIDE_MARGIN * height
+    t = np.linspace(0.0, 0.5, 51)[1:]
+    for i in outside[np.argsort(depth[outside])[::-1]]:  # nearest the skin first
+        incident = np.flatnonzero((bones == i).any(axis=1))
+        if len(incident) == 0:
+            continue  # a joint no bone uses does not move anything
+        others = np.where(bones[incident, 0] == i, bones[incident, 1], bones[incident, 0])
+        k = int(np.argmax(depth[others]))
+        a, b = joints[i], joints[others[k]]
+        points = a + t[:, None] * (b - a)
+        d = -np.asarray(igl.signed_distance(points, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
+        deep = np.flatnonzero(d >= margin)
+        s = int(deep[0]) if len(deep) else int(np.argmax(d))
+        if d[s] <= 0:
+            raise InputError(path, f"joint {i + 1} lies {100 * -depth[i] / height:.2f} % of the model's height "
+                             f"outside the surface and bone {incident[k] + 1} does not enter it; "
+                             "move the joint inside")
+        warnings.append(f"joint {i + 1} lay {100 * -depth[i] / height:.2f} % of the model's height outside the "
+                        f"surface; moved {np.linalg.norm(points[s] - a):.3g} along bone {incident[k] + 1} to lie "
+                        "inside")
+        joints[i] = points[s]
+        depth[i] = d[s]
+    return joints, warnings

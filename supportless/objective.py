@@ -157,12 +157,13 @@ class Objective:
         :mod:`supportless.orientation`); none = printed as the model stands.
         """
         if rotations is not None:
-            vertices = np.einsum("...ij,...nj->...ni", rotations, vertices)
+            vertices = np.matmul(vertices, np.swapaxes(rotations, -1, -2))
         if self.overhang_model == "column":
             return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
                                   backend=self.backend)
+        # the rig's surface is outward oriented and skinning and turning keep it so: no need to measure it
         return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend,
-                               floor=self.support_floor * self.height)
+                               floor=self.support_floor * self.height, orient=1.0)
 
     @cached_property
     def height(self) -> float:

@@ -28,22 +28,19 @@ from .energies.balance import centre_of_mass_operator
 from .errors import InputError
 from .geometry import parse_up, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, compute_weights
 
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 4
+CACHE_VERSION = 5
 
-#: A joint outside the surface by at most this fraction of the model's height is
-#: moved inside (:func:`pull_joints_inside`); farther out is an error. Real tips
-#: (fingers, toes, the top of the head, a root joint on the floor) lie within
-#: about 1 % of the skin; 3 % leaves room for coarse rigs while a skeleton in
-#: other units or of another model is still refused.
-JOINT_OUTSIDE_TOLERANCE = 0.03
-
-#: How deep inside a moved joint is put, as a fraction of the model's height.
-JOINT_INSIDE_MARGIN = 0.005
+#: A surface with more triangles than this is simplified (quadric edge
+#: collapse, no new self-intersections) to :data:`PROXY_TARGET` triangles for
+#: the volume mesh, the weights and the search; outputs stay full resolution.
+PROXY_FACES = 20000
+PROXY_TARGET = 10000
 
 #: Surface vertices within this fraction of the model's height of its lowest
 #: point rest on the build plate (:attr:`Rig.contact_vertices`).
@@ -81,6 +78,10 @@ class Rig:
     labels : list of str, optional
         Bone names (a glTF rig's joint names); ``--fix``/``--free``/``--limit``
         accept them besides the 1-based numbers.
+    coarse_faces : (c, 3) int64, optional
+        For a dense surface, the triangles of the simplified surface the volume
+        mesh was made from, indexing ``tet_vertices`` (its vertices follow the
+        ``n`` surface vertices); the search runs on it (:meth:`coarse_rig`).
     """
 
     vertices: np.ndarray
@@ -94,6 +95,7 @@ class Rig:
     name: str = "model"
     info: dict = field(default_factory=dict)
     labels: list | None = None
+    coarse_faces: np.ndarray | None = None
 
     # ----------------------------------------------------------------- basics
     @property
@@ -248,6 +250,20 @@ class Rig:
         """Joint positions of a batch of poses, (P, j, d) or (j, d) float64."""
         return kin.posed_joints(self.joints, self.bones, self.transforms(angles))
 
+    def coarse_rig(self) -> Rig | None:
+        """The rig of the simplified surface (a dense model's proxy for the search), or None.
+
+        Same bones, joints, volume mesh and weights; its surface is the
+        simplified one the volume mesh was made from (:attr:`coarse_faces`).
+        """
+        if self.coarse_faces is None:
+            return None
+        n = len(self.vertices)
+        Fc = self.coarse_faces - n
+        nc = int(Fc.max()) + 1
+        return Rig(self.tet_vertices[n:n + nc], Fc, self.joints, self.bones, self.tet_vertices[n:], self.tets - n,
+                   self.tet_weights[n:], self.up, name=self.name, info={"warnings": []}, labels=self.labels)
+
     def rest_angles(self) -> np.ndarray:
         """(m, 3) float64 zeros: the rest pose."""
         return np.zeros((self.bone_count, 3))
@@ -297,90 +313,6 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
     else:
         joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
     return V, F, joints, 3, warnings
-
-
-def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,
-                       path=None, tolerance: float = JOINT_OUTSIDE_TOLERANCE,
-                       within: float = 0.0) -> tuple[np.ndarray, list[str]]:
-    """Move joints that lie just outside a closed surface inside it, along one of their bones.
-
-    Real skeletons put tips (fingertips, toe tips, the top of the head, a root
-    joint on the floor) on or just outside the skin. A joint outside by at most
-    :data:`JOINT_OUTSIDE_TOLERANCE` of the model's height is moved along the
-    bone towards its deepest neighbouring joint, to the first point that lies
-    :data:`JOINT_INSIDE_MARGIN` of the height inside (or, on a part thinner
-    than that, to the deepest point of the bone's first half). Farther outside
-    is an error: such a skeleton belongs to another model or other units.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-        Closed, outward-oriented surface.
-    F : (f, 3) int64
-    joints : (j, 3) float64
-    bones : (m, 2) int64
-    up : str or (3,) float
-        Printing direction (the height is measured along it).
-    path : str or os.PathLike, optional
-        The skeleton file, named in errors.
-    tolerance : float
-        How far outside a joint may be (fraction of the height) to be moved.
-    within : float
-        Also move joints less than this deep inside (fraction of the height):
-        a glTF rig's joints on the skin, for bones sampled into the volume.
-
-    Returns
-    -------
-    joints : (j, 3) float64
-        A copy with the moved joints.
-    warnings : list of str
-        One line per moved joint: which joint, how far outside it was, where it went.
-
-    Raises
-    ------
-    InputError
-        A joint farther outside than the tolerance, or one that cannot be
-        moved inside along any of its bones.
-    """
-    import igl
-
-    joints = np.array(joints, np.float64)
-    height = float(np.ptp(V @ parse_up(up)))
-    if height <= 0:
-        height = float(np.ptp(V, axis=0).max())
-    depth = -np.asarray(igl.signed_distance(joints, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
-    outside = np.flatnonzero(depth < within * height)
-    far = outside[-depth[outside] > tolerance * height]
-    if len(far):
-        i = int(far[np.argmin(depth[far])])
-        raise InputError(path, f"joint {i + 1} at {np.round(joints[i], 6).tolist()} lies "
-                         f"{100 * -depth[i] / height:.1f} % of the model's height outside the surface "
-                         f"({len(far)} joints farther out than {100 * tolerance:g} %); "
-                         "check the skeleton belongs to this model and uses the same units")
-    warnings = []
-    margin = JOINT_INSIDE_MARGIN * height
-    t = np.linspace(0.0, 0.5, 51)[1:]
-    for i in outside[np.argsort(depth[outside])[::-1]]:  # nearest the skin first
-        incident = np.flatnonzero((bones == i).any(axis=1))
-        if len(incident) == 0:
-            continue  # a joint no bone uses does not move anything
-        others = np.where(bones[incident, 0] == i, bones[incident, 1], bones[incident, 0])
-        k = int(np.argmax(depth[others]))
-        a, b = joints[i], joints[others[k]]
-        points = a + t[:, None] * (b - a)
-        d = -np.asarray(igl.signed_distance(points, V, F, igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
-        deep = np.flatnonzero(d >= margin)
-        s = int(deep[0]) if len(deep) else int(np.argmax(d))
-        if d[s] <= 0:
-            raise InputError(path, f"joint {i + 1} lies {100 * -depth[i] / height:.2f} % of the model's height "
-                             f"outside the surface and bone {incident[k] + 1} does not enter it; "
-                             "move the joint inside")
-        warnings.append(f"joint {i + 1} lay {100 * -depth[i] / height:.2f} % of the model's height outside the "
-                        f"surface; moved {np.linalg.norm(points[s] - a):.3g} along bone {incident[k] + 1} to lie "
-                        "inside")
-        joints[i] = points[s]
-        depth[i] = d[s]
-    return joints, warnings
 
 
 def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -450,6 +382,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     J = np.asarray(joints, np.float64)
     B = np.asarray(bones, np.int64)
     skinned = surface_weights is not None
+    coarse = None
     V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
                                            pivots_only=pivots_only)
     up_vec = parse_up(up, dim)
@@ -466,6 +399,9 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         if not conforming:
             warnings = list(warnings) + ["TetGen could not keep the surface as it is; the volume mesh splits it "
                                          "(distortion is measured on that mesh)"]
+    elif tet_mesh is None and dim == 3 and len(F) > PROXY_FACES and (coarse := _coarse_volume(
+            V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_path, say)) is not None:
+        Vc, Fc, TVc, TTc, Wc = coarse
     elif tet_mesh is not None:
         TV, TT = (np.asarray(a) for a in tet_mesh)
         TV, TT, tet_order = _attach_surface(V, TV.astype(np.float64), TT.astype(np.int64), mesh_path)
@@ -476,7 +412,14 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         say("refining the planar mesh along the bones")
         TV, TT = refine_triangulation_with_points(V, F, bone_samples(J, B, samples_per_bone))
     t1 = time.perf_counter()
-    if skinned:
+    if coarse is not None:
+        from .printbody import transfer_values
+
+        Ws = transfer_values(V, Vc, Fc, Wc[: len(Vc)])
+        TV, TT, W = np.vstack([V, TVc]), TTc + len(V), np.vstack([Ws / Ws.sum(1, keepdims=True), Wc])
+        warnings = list(warnings) + [f"{len(F)} triangles: the volume mesh and the search use the surface "
+                                     f"simplified to {len(Fc)}; outputs and reports are full resolution"]
+    elif skinned:
         from .printbody import transfer_values
 
         W = np.vstack([Ws, transfer_values(TV[len(V):], V, F, Ws)]) if len(TV) > len(V) else Ws
@@ -495,7 +438,34 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
             "bbw_iterations": bbw_iterations, "warnings": warnings, "weights": "skin" if skinned else "bbw"}
-    return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info, labels=list(labels) if labels is not None else None)
+    return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info, labels=list(labels) if labels is not None else None,
+               coarse_faces=None if coarse is None else Fc + len(V))
+
+
+def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_path, say):
+    """Volume mesh and weights of the surface simplified to :data:`PROXY_TARGET` triangles.
+
+    Returns ``(Vc, Fc, TVc, TTc, Wc)``, or None when the simplified surface
+    cannot be meshed or weighted (then the full surface is).
+    """
+    from .printbody import simplify_surface
+    from .tetmesh import tetrahedralize_with_skeleton
+
+    say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
+    simplified = simplify_surface(V, F, PROXY_TARGET)
+    if simplified is None:
+        return None
+    Vc, Fc = simplified
+    try:
+        Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path)
+        say("tetrahedralising")
+        TVc, TTc = tetrahedralize_with_skeleton(Vc, Fc, Jc, B, samples_per_bone)
+        say("computing bounded biharmonic weights")
+        Wc = compute_weights(TVc, TTc, Jc, B, bbw_iterations)
+    except (InputError, RuntimeError):
+        say("the simplified surface could not be meshed; meshing the full surface")
+        return None
+    return Vc, Fc, TVc, TTc, Wc
 
 
 def _attach_surface(V, TV, TT, path):
@@ -676,7 +646,9 @@ def _write_cached(file: Path, rig: Rig) -> None:
         with open(tmp, "wb") as fh:
             np.savez(fh, version=CACHE_VERSION, warnings=np.array(rig.info.get("warnings", []), dtype=str),
                      labels=np.array(rig.labels if rig.labels is not None else [], dtype=str),
-                     has_labels=rig.labels is not None, **{k: getattr(rig, k) for k in _ARRAYS})
+                     has_labels=rig.labels is not None,
+                     coarse_faces=rig.coarse_faces if rig.coarse_faces is not None else np.zeros((0, 3), np.int64),
+                     **{k: getattr(rig, k) for k in _ARRAYS})
 
 
 def _read_cached(file: Path, name: str) -> Rig:
@@ -686,4 +658,5 @@ def _read_cached(file: Path, name: str) -> Rig:
         arrays = {k: data[k] for k in _ARRAYS}
         warnings = [str(w) for w in data["warnings"]]
         labels = [str(x) for x in data["labels"]] if bool(data["has_labels"]) else None
-    return Rig(**arrays, name=name, info={"warnings": warnings}, labels=labels)
+        coarse = data["coarse_faces"] if len(data["coarse_faces"]) else None
+    return Rig(**arrays, name=name, info={"warnings": warnings}, labels=labels, coarse_faces=coarse)

@@ -290,6 +290,10 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     """
     t0 = time.perf_counter()
     settings = (settings or SearchSettings()).replace(**changes)
+    coarse = rig.coarse_rig() if objective is None else None
+    if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
+        found = optimize(coarse, settings, start=start, start_rotation=start_rotation, callback=callback)
+        return _on_full_surface(rig, found, settings.objective(rig), t0)
     if objective is None:
         objective = settings.objective(rig)
     base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
@@ -386,3 +390,18 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
                       stats=stats, rotation=rotation,
                       print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
+
+
+def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
+    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface."""
+    angles, rotation = found.angles, found.rotation
+    turned = not np.allclose(rotation, np.eye(rig.dim))
+    posed = place_on_plate(rig.pose(angles), rig.up)
+    R = rotation if turned else None
+    value = float(objective(angles, R))
+    terms = {key: float(v) for key, v in objective.terms(angles, R).items()}
+    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value))
+    return PoseResult(angles=angles, vertices=posed, value=value, history=found.history, terms=terms,
+                      settings=found.settings, objective=objective, interrupted=found.interrupted, fixed=found.fixed,
+                      term_history=found.term_history, runtime_seconds=time.perf_counter() - t0, stats=stats,
+                      rotation=rotation, print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)

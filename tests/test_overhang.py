@@ -242,3 +242,20 @@ def test_floor_adds_a_fixed_height_under_every_risky_face(backend):
     plain = overhang_energy(tri, T, [0.0, 1.0], 45.0, backend=backend)
     raised = overhang_energy(tri, T, [0.0, 1.0], 45.0, backend=backend, floor=0.5)
     assert raised == pytest.approx(plain + 0.5 * projected_risky_area(tri, T, [0.0, 1.0], 45.0), rel=1e-12)
+
+
+def test_a_given_winding_equals_the_measured_one():
+    """``orient`` saves measuring the winding per pose; it must give what the measurement gives."""
+    from meshes import box
+
+    V, F = box((0, 0, 0), (1, 2, 1))
+    rng = np.random.default_rng(3)
+    Q = [np.linalg.qr(rng.normal(size=(3, 3)))[0] * s for s in (1, -1, 1, -1)]  # rotations and reflections
+    batch = np.stack([V @ q for q in Q])
+    measured = overhang_energy(batch, F, "y")
+    winding = np.array([np.sign(np.linalg.det(q)) for q in Q])  # a reflection turns the faces inward
+    assert (winding < 0).any() and (winding > 0).any()
+    np.testing.assert_allclose(overhang_energy(batch, F, "y", orient=winding), measured, rtol=1e-12)
+    np.testing.assert_allclose(overhang_energy(batch, F[:, ::-1], "y", orient=-winding),
+                               overhang_energy(batch, F[:, ::-1], "y"), rtol=1e-12)
+    assert not np.allclose(overhang_energy(batch, F, "y", orient=-1.0), measured)

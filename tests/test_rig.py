@@ -370,3 +370,61 @@ def test_a_bone_that_leaves_the_solid_keeps_only_its_samples_inside():
     inner = rig.tet_vertices[len(rig.vertices):]
     assert np.all(igl.winding_number(rig.vertices, rig.faces, inner) > 0.5)  # no tet vertex outside
     assert rig.weights[:, 3].max() > 0.99  # the bone still drives the skin near its inside ends
+
+
+# --------------------------------------------------------------------------- #
+# a dense surface: volume mesh, weights and search on a simplified proxy
+# --------------------------------------------------------------------------- #
+@pytest.fixture(scope="module")
+def dense_branch(tmp_path_factory):
+    """The branch figure subdivided twice, prepared with the proxy thresholds lowered to its size."""
+    V, F, J, B = sl.demo_figure("branch")
+    V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
+    mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
+    try:
+        rig = sl.prepare_rig(V2, F2, J, B, "y", name="dense")
+    finally:
+        mp.undo()
+    return rig, len(F2) // 8
+
+
+def test_a_dense_surface_is_meshed_and_weighted_through_its_simplified_proxy(dense_branch):
+    rig, target = dense_branch
+    assert rig.coarse_faces is not None
+    coarse = rig.coarse_rig()
+    assert len(coarse.faces) <= target
+    # the proxy is a closed surface of the same solid, its rows the first of the volume mesh
+    sl.io.check_closed_surface(coarse.vertices, coarse.faces)
+    assert abs(signed_volume(coarse.vertices, coarse.faces) / signed_volume(rig.vertices, rig.faces) - 1) < 0.05
+    np.testing.assert_array_equal(coarse.tet_vertices[: len(coarse.vertices)], coarse.vertices)
+    # full-resolution weights: a partition of unity taken from the proxy's surface
+    np.testing.assert_allclose(rig.weights.sum(1), 1.0, atol=1e-9)
+    assert rig.weights.shape == (len(rig.vertices), rig.bone_count)
+    # posing the full surface and the proxy moves them together
+    angles = np.zeros((rig.bone_count, 3))
+    angles[-1] = [0.0, 0.0, 0.6]
+    full, proxy = rig.pose(angles), coarse.pose(angles)
+    d = np.sqrt(igl.point_mesh_squared_distance(proxy, full, rig.faces)[0])
+    assert d.max() < 0.05 * np.ptp(rig.vertices, axis=0).max()
+
+
+def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
+    rig, _ = dense_branch
+    file = tmp_path / "rig.npz"
+    rig_mod._write_cached(file, rig)
+    back = rig_mod._read_cached(file, "dense")
+    np.testing.assert_array_equal(back.coarse_faces, rig.coarse_faces)
+
+
+def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branch):
+    rig, _ = dense_branch
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    assert result.stats["proxy_faces"] == len(rig.coarse_rig().faces)
+    assert result.vertices.shape == rig.vertices.shape
+    # the value and terms are those of the full surface at the found pose
+    objective = result.objective
+    assert objective.rig is rig
+    np.testing.assert_allclose(result.value, float(objective(result.angles)), rtol=1e-12)
+    np.testing.assert_allclose(result.vertices, sl.geometry.place_on_plate(rig.pose(result.angles), rig.up))

@@ -157,15 +157,21 @@ def _numpy(V, F, u, orient, tau, floor=0.0):
     return out, mask
 
 
-def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0):
+def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0, orient=None):
     """Check the arguments and run a backend.
+
+    ``orient`` (+1/-1, or (P,) of them) is the winding of the faces when the
+    caller knows it; otherwise it is measured per pose.
 
     Returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask, single).
     """
     check_backend(backend)
     V, F, u, single = prepare(vertices, faces, up)
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
-    orient = orientation_sign(V, F, backend)
+    if orient is None:
+        orient = orientation_sign(V, F, backend)
+    else:
+        orient = np.broadcast_to(np.asarray(orient, np.float64), (V.shape[0],)).copy()
     if backend == "numpy":
         out, mask = _numpy(V, F, u, orient, tau, float(floor))
     elif V.shape[-1] == 3:
@@ -240,7 +246,7 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     return _out(out[:, 1], single)
 
 
-def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", floor=0.0):
+def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", floor=0.0, orient=None):
     """Prism overhang energy ``sum_f A_f |n_f . up| (h_f + floor)`` over risky faces.
 
     Parameters
@@ -264,6 +270,10 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", fl
         Added to every prism's height (length units): what a support costs
         however low it is (its interface layers and base). 0 is the paper's
         estimate.
+    orient : float or (P,) float64, optional
+        +1 when the faces are outward oriented (counter-clockwise in 2D), -1
+        when inverted, if the caller knows it (a rig's surface, posed);
+        measured per pose when not given.
 
     Returns
     -------
@@ -272,7 +282,7 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", fl
         (``s**2`` in 2D) under uniform scaling and is invariant under
         rotations about ``up`` and translations.
     """
-    out, _, single = _compute(vertices, faces, up, overhang_angle, backend, floor)
+    out, _, single = _compute(vertices, faces, up, overhang_angle, backend, floor, orient)
     return _out(out[:, 0], single)
 
 
