@@ -178,14 +178,12 @@ class Rig:
 
     @cached_property
     def lbs(self):
-        """(n, m*(d+1)) float64 scipy.sparse CSR matrix: skinning matrix of the surface, ``V' = M T``.
+        """(n, m*(d+1)) float64: skinning matrix of the surface, ``V' = M T``.
 
-        Sparse: a vertex follows a few bones (a glTF skin: at most 4 to 8), and
-        even bounded biharmonic weights are zero on about half the bones.
+        A scipy.sparse CSR matrix when a vertex follows a few bones (a glTF
+        skin), else an array (:func:`~supportless.kinematics.lbs_operator`).
         """
-        from scipy.sparse import csr_matrix
-
-        return csr_matrix(kin.lbs_matrix(self.vertices, self.weights))
+        return kin.lbs_operator(self.vertices, self.weights)
 
     @property
     def bone_count(self) -> int:

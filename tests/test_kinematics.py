@@ -300,3 +300,23 @@ def test_connecting_bones_is_the_chain_between_the_contacts():
     # two separate skeletons (a forest) are not joined
     forest = np.array([[0, 1], [2, 3]])
     np.testing.assert_array_equal(kin.connecting_bones(forest, np.array([1, 1], bool)), [1, 1])
+
+
+def test_sparse_skinning_equals_the_dense_product():
+    """The compiled loop over a sparse LBS matrix gives ``M @ T`` (batch and single pose)."""
+    from scipy.sparse import csr_matrix
+
+    from supportless.kinematics import lbs_matrix, lbs_operator, skin, stack_transforms
+
+    rng = np.random.default_rng(5)
+    V = rng.normal(size=(50, 3))
+    W = rng.random((50, 6)) * (rng.random((50, 6)) < 0.3)
+    W[W.sum(1) == 0, 0] = 1.0
+    W /= W.sum(1, keepdims=True)
+    T = rng.normal(size=(7, 6, 3, 4))
+    dense = lbs_matrix(V, W)
+    assert hasattr(lbs_operator(V, W), "indptr")  # few non-zeros: kept sparse
+    expected = np.matmul(dense, stack_transforms(T))
+    np.testing.assert_allclose(skin(csr_matrix(dense), T), expected, atol=1e-12)
+    np.testing.assert_allclose(skin(csr_matrix(dense), T[3]), expected[3], atol=1e-12)
+    np.testing.assert_allclose(skin(dense, T), expected, atol=1e-12)
