@@ -400,9 +400,8 @@ def stack_transforms(transforms: np.ndarray) -> np.ndarray:
 
 
 #: An LBS matrix with fewer non-zeros than this share is kept sparse
-#: (:func:`lbs_operator`). The compiled loop over non-zeros costs about 3/4 of
-#: dense BLAS per entry on 2 cores (bunny, 200 poses: 30 ms at 65 % non-zeros
-#: against 29-40 ms dense; a glTF skin at 2 %: 6 ms against 44-52 ms).
+#: (:func:`lbs_operator`). On 2 cores, 200 poses: the bunny (65 % non-zeros)
+#: 25 ms sparse against 27 ms dense; a glTF skin (2 %) 3-5 ms against 39-41 ms.
 SPARSE_LBS = 0.75
 
 
@@ -428,15 +427,38 @@ def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
 
 
 @njit(parallel=True, cache=True)
-def _skin_csr(indptr, indices, data, T, out):  # pragma: no cover - compiled
-    d = T.shape[2]
+def _skin_csr3(indptr, indices, data, T, out):  # pragma: no cover - compiled
     for p in prange(T.shape[0]):
+        Tp = T[p]
         for i in range(len(indptr) - 1):
-            for c in range(d):
-                acc = 0.0
-                for k in range(indptr[i], indptr[i + 1]):
-                    acc += data[k] * T[p, indices[k], c]
-                out[p, i, c] = acc
+            x = 0.0
+            y = 0.0
+            z = 0.0
+            for k in range(indptr[i], indptr[i + 1]):
+                j = indices[k]
+                w = data[k]
+                x += w * Tp[j, 0]
+                y += w * Tp[j, 1]
+                z += w * Tp[j, 2]
+            out[p, i, 0] = x
+            out[p, i, 1] = y
+            out[p, i, 2] = z
+
+
+@njit(parallel=True, cache=True)
+def _skin_csr2(indptr, indices, data, T, out):  # pragma: no cover - compiled
+    for p in prange(T.shape[0]):
+        Tp = T[p]
+        for i in range(len(indptr) - 1):
+            x = 0.0
+            y = 0.0
+            for k in range(indptr[i], indptr[i + 1]):
+                j = indices[k]
+                w = data[k]
+                x += w * Tp[j, 0]
+                y += w * Tp[j, 1]
+            out[p, i, 0] = x
+            out[p, i, 1] = y
 
 
 def skin(M, transforms: np.ndarray) -> np.ndarray:
@@ -459,5 +481,6 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     single = T.ndim == 2
     T = np.ascontiguousarray(T[None] if single else T, np.float64)
     out = np.empty((T.shape[0], M.shape[0], T.shape[2]))
-    _skin_csr(M.indptr.astype(np.int64), M.indices.astype(np.int64), M.data.astype(np.float64), T, out)
+    kernel = _skin_csr3 if T.shape[2] == 3 else _skin_csr2
+    kernel(M.indptr.astype(np.int64), M.indices.astype(np.int64), M.data.astype(np.float64), T, out)
     return out[0] if single else out
