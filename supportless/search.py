@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from .energies.exact import intersecting_face_pairs
+from .energies.exact import self_intersects
 from .geometry import place_on_plate, print_pose
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
@@ -324,7 +324,7 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     feasible = None
     if settings.exact_intersections and rig.dim == 3:
         def no_intersection(x):
-            return intersecting_face_pairs(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces) == 0
+            return not self_intersects(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces)
 
         feasible = _Timed(no_intersection, stats, "exact")
 

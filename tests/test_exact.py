@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from supportless.energies.exact import intersecting_face_pairs, intersecting_faces
+from supportless.energies.exact import intersecting_face_pairs, intersecting_faces, self_intersects
 
 from meshes import box
 
@@ -45,3 +45,16 @@ def test_planar_meshes_have_no_exact_test():
     assert intersecting_face_pairs(V, F) == -1
     with pytest.raises(ValueError):
         intersecting_faces(V, F)
+
+
+def test_self_intersects_agrees_with_the_pairs():
+    """The first-pair test answers as the full list does: overlapping, separate, touching at a shared face."""
+    V1, F1 = box((0, 0, 0), (1, 1, 1))
+    for lo, hi, expected in (((0.5, 0.25, 0.25), (1.5, 0.75, 0.75), True), ((2, 0, 0), (3, 1, 1), False)):
+        V2, F2 = box(lo, hi)
+        V, F = np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+        assert self_intersects(V, F) is expected
+        assert self_intersects(V, F) == (intersecting_face_pairs(V, F) > 0)
+    assert self_intersects(V1, F1) is False
+    with pytest.raises(ValueError):
+        self_intersects(np.zeros((3, 2)), np.array([[0, 1, 2]]))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["intersecting_faces", "intersecting_face_pairs"]
+__all__ = ["intersecting_faces", "intersecting_face_pairs", "self_intersects"]
 
 
 def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -63,3 +63,30 @@ def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
     if np.shape(vertices)[-1] != 3:
         return -1
     return int(len(intersecting_faces(vertices, faces)))
+
+
+def self_intersects(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether any two triangles intersect (CGAL's exact predicates), stopping at the first pair found.
+
+    Half the time of :func:`intersecting_faces` on a surface that does
+    intersect itself (the search's rejected candidates); the same on one that
+    does not.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    intersects : bool
+    """
+    V = np.ascontiguousarray(vertices, np.float64)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise ValueError(f"vertices must be (n, 3) for the exact test, not {V.shape}")
+    import igl
+    import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
+
+    out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True,
+                                                       first_only=True)
+    return len(out[2]) > 0
