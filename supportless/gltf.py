@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import base64
 import urllib.parse
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -633,10 +634,12 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
             node.rotation = _matrix_quat(R).tolist()
             node.scale = scale.tolist()
     destination = Path(destination)
-    if destination.suffix.lower() == ".gltf":
-        doc.convert_buffers(pygltflib.BufferFormat.DATAURI)
-    elif str(source).lower().endswith(".gltf"):
-        doc.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
+    with warnings.catch_warnings():  # pygltflib warns that the source's .bin is not used by the copy
+        warnings.simplefilter("ignore", UserWarning)
+        if destination.suffix.lower() == ".gltf":
+            doc.convert_buffers(pygltflib.BufferFormat.DATAURI)
+        elif str(source).lower().endswith(".gltf"):
+            doc.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
     with atomic_path(destination) as tmp:
         if destination.suffix.lower() == ".gltf":
             doc.save_json(str(tmp))

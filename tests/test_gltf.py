@@ -16,6 +16,8 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import warnings
+
 import numpy as np
 import pygltflib
 import pytest
@@ -922,3 +924,17 @@ def test_weights_bbw_recomputes_weights_on_the_derived_bones(tmp_path, cache):
     # the file's weights are rigid per segment; bounded biharmonic weights blend across the joints
     assert ((skin.weights > 0) & (skin.weights < 1)).sum() < ((bbw.weights > 1e-3) & (bbw.weights < 1 - 1e-3)).sum()
 
+
+
+def test_a_gltf_with_an_external_bin_is_posed_into_a_glb(tmp_path, cache):
+    """A .gltf whose buffer is a separate .bin file: the posed .glb carries the data and poses like the rig."""
+    path = write_gltf(character(), tmp_path / "split.gltf", external_bin=True)
+    rig = load(path, cache)
+    source = rig.info["gltf"]
+    angles = np.random.default_rng(7).uniform(-0.6, 0.6, (rig.bone_count, 3))
+    T = posed_joint_transforms(rig.transforms(angles), source["driver"], source["scale"])
+    out = tmp_path / "out" / "posed.glb"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no "orphaned .bin" warning reaches the user
+        write_posed_gltf(path, out, T, source["joint_nodes"])
+    assert check_posed_file(rig, out, angles, path) > 0
