@@ -13,10 +13,9 @@ from __future__ import annotations
 import base64
 import copy
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import warnings
 
 import numpy as np
 import pygltflib
