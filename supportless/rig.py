@@ -380,7 +380,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     J = np.asarray(joints, np.float64)
     B = np.asarray(bones, np.int64)
     skinned = surface_weights is not None
-    coarse = None
+    coarse = simplified = None
     V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
                                            pivots_only=pivots_only)
     up_vec = parse_up(up, dim)
@@ -392,8 +392,14 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         if Ws.shape != (len(V), len(B)):
             raise InputError(mesh_path, f"skin weights are {Ws.shape[0]}x{Ws.shape[1]} for {len(V)} vertices "
                              f"and {len(B)} bones")
+        simplified = _simplified(V, F, say) if len(F) > PROXY_FACES else None
         say("tetrahedralising")
-        TV, TT, conforming = tetrahedralize_surface(V, F)
+        TV, TT, conforming = tetrahedralize_surface(*(simplified or (V, F)))
+        if simplified is not None:  # the volume of the simplified surface, its rows after the full surface's
+            Vc, Fc = simplified
+            TV, TT = np.vstack([V, TV]), TT + len(V)
+            warnings = list(warnings) + [f"{len(F)} triangles: the volume mesh and the search use the surface "
+                                         f"simplified to {len(Fc)}; outputs and reports are full resolution"]
         if not conforming:
             warnings = list(warnings) + ["TetGen could not keep the surface as it is; the volume mesh splits it "
                                          "(distortion is measured on that mesh)"]
@@ -436,8 +442,17 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
             "bbw_iterations": bbw_iterations, "warnings": warnings, "weights": "skin" if skinned else "bbw"}
+    proxy = coarse is not None or simplified is not None
     return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info, labels=list(labels) if labels is not None else None,
-               coarse_faces=None if coarse is None else Fc + len(V))
+               coarse_faces=Fc + len(V) if proxy else None)
+
+
+def _simplified(V, F, say):
+    """The surface simplified to :data:`PROXY_TARGET` triangles, or None."""
+    from .printbody import simplify_surface
+
+    say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
+    return simplify_surface(V, F, PROXY_TARGET)
 
 
 def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_path, say):
@@ -446,11 +461,9 @@ def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_pa
     Returns ``(Vc, Fc, TVc, TTc, Wc)``, or None when the simplified surface
     cannot be meshed or weighted (then the full surface is).
     """
-    from .printbody import simplify_surface
     from .tetmesh import tetrahedralize_with_skeleton
 
-    say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
-    simplified = simplify_surface(V, F, PROXY_TARGET)
+    simplified = _simplified(V, F, say)
     if simplified is None:
         return None
     Vc, Fc = simplified

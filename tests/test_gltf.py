@@ -17,6 +17,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import igl
 import numpy as np
 import pygltflib
 import pytest
@@ -937,3 +938,26 @@ def test_a_gltf_with_an_external_bin_is_posed_into_a_glb(tmp_path, cache):
         warnings.simplefilter("error")  # no "orphaned .bin" warning reaches the user
         write_posed_gltf(path, out, T, source["joint_nodes"])
     assert check_posed_file(rig, out, angles, path) > 0
+
+
+def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, monkeypatch):
+    """Over the proxy threshold a glTF rig gets a simplified volume and search surface; answers stay full size."""
+    from supportless import rig as rig_mod
+    from supportless.search import optimize
+
+    path = write_gltf(character(), tmp_path / "column.glb")
+    plain = load(path, cache)
+    V, F = plain.vertices, plain.faces
+    V2, F2 = igl.upsample(V, F, 2)  # a denser print body of the same column
+    monkeypatch.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
+    monkeypatch.setattr(rig_mod, "PROXY_TARGET", len(F2) // 4)
+    from supportless.printbody import transfer_values
+
+    dense = rig_mod.prepare_rig(V2, F2, plain.joints, plain.bones, "y",
+                                surface_weights=transfer_values(V2, V, F, plain.weights))
+    assert dense.coarse_faces is not None
+    coarse = dense.coarse_rig()
+    assert len(coarse.faces) <= len(F2) // 4
+    np.testing.assert_allclose(dense.weights.sum(1), 1.0, atol=1e-9)
+    result = optimize(dense, particles=8, iterations=2, orient="keep")
+    assert result.vertices.shape == V2.shape and result.stats["proxy_faces"] == len(coarse.faces)
