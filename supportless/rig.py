@@ -15,6 +15,7 @@ refined so that vertices lie on the bones.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import time
 from dataclasses import dataclass, field
@@ -34,7 +35,7 @@ from .weights import BBW_ITERATIONS, compute_weights
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 5
+CACHE_VERSION = 6
 
 #: A surface with more triangles than this is simplified (quadric edge
 #: collapse, no new self-intersections) to :data:`PROXY_TARGET` triangles for
@@ -577,6 +578,12 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
             raise InputError(weights, "a glTF model takes --weights skin (its own, the default) or --weights bbw")
         if tets is not None:
             raise InputError(tets, "--tets does not go with a glTF model's skin; leave it out")
+        # keyed by the file's bytes, so a cached rig skips reading the skin and making the print body
+        file = _gltf_cache_file(mesh_path, cache_dir, weights or "skin", height_mm, up, samples_per_bone,
+                                bbw_iterations)
+        if cache and (rig := _try_cached(file, name)) is not None and "gltf" in rig.info:
+            rig.info["gltf"]["path"] = str(mesh_path)  # the same bytes may have moved
+            return rig
         V, F, J, B, surface_weights, labels, source = load_gltf_character(mesh_path, progress=progress)
         if weights == "bbw":
             surface_weights = None
@@ -611,20 +618,11 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         settings["tets"] = h.hexdigest()
     if W is not None:
         settings["weights"] = hashlib.sha256(W.tobytes()).hexdigest()
-    up_key = np.asarray(parse_up(up), np.float64)
-    key = rig_cache_key(V, F, J, B, up_key, **settings)
-    folder = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    file = folder / f"rig-{key}.npz"
-    if cache and file.is_file():
-        try:
-            rig = _read_cached(file, name)
-            if source is not None:
-                rig.info["gltf"] = source
-            rig.info["cache"] = str(file)
-            rig.info["from_cache"] = True
+    if source is None:
+        key = rig_cache_key(V, F, J, B, np.asarray(parse_up(up), np.float64), **settings)
+        file = (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{key}.npz"
+        if cache and (rig := _try_cached(file, name)) is not None:
             return rig
-        except Exception:  # a damaged cache entry is recomputed, never fatal
-            pass
     try:
         rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
                           tet_mesh=tet_arrays, tet_weights=W, mesh_path=mesh_path, skeleton_path=skel_path,
@@ -648,6 +646,31 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     return rig
 
 
+def _gltf_cache_file(path: Path, cache_dir, weights, height_mm, up, samples_per_bone, bbw_iterations) -> Path:
+    """The cache file of a glTF rig: a hash of the file's bytes and every setting that changes the rig."""
+    h = hashlib.sha256(f"supportless-gltf-rig-v{CACHE_VERSION}".encode())
+    try:
+        h.update(path.read_bytes())
+    except OSError:  # reading it properly says what is wrong
+        h.update(b"unreadable")
+    h.update(repr((weights, height_mm, np.asarray(parse_up(up), np.float64).tolist(), samples_per_bone,
+                   bbw_iterations)).encode())
+    return (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{h.hexdigest()[:24]}.npz"
+
+
+def _try_cached(file: Path, name: str) -> Rig | None:
+    """The rig cached in ``file``, or None (missing or damaged: a damaged entry is recomputed, never fatal)."""
+    if not file.is_file():
+        return None
+    try:
+        rig = _read_cached(file, name)
+    except Exception:
+        return None
+    rig.info["cache"] = str(file)
+    rig.info["from_cache"] = True
+    return rig
+
+
 _ARRAYS = ("vertices", "faces", "joints", "bones", "tet_vertices", "tets", "tet_weights", "up")
 
 
@@ -659,6 +682,7 @@ def _write_cached(file: Path, rig: Rig) -> None:
                      labels=np.array(rig.labels if rig.labels is not None else [], dtype=str),
                      has_labels=rig.labels is not None,
                      coarse_faces=rig.coarse_faces if rig.coarse_faces is not None else np.zeros((0, 3), np.int64),
+                     gltf=np.array(json.dumps(rig.info.get("gltf"))),
                      **{k: getattr(rig, k) for k in _ARRAYS})
 
 
@@ -670,4 +694,6 @@ def _read_cached(file: Path, name: str) -> Rig:
         warnings = [str(w) for w in data["warnings"]]
         labels = [str(x) for x in data["labels"]] if bool(data["has_labels"]) else None
         coarse = data["coarse_faces"] if len(data["coarse_faces"]) else None
-    return Rig(**arrays, name=name, info={"warnings": warnings}, labels=labels, coarse_faces=coarse)
+        source = json.loads(str(data["gltf"]))
+    info = {"warnings": warnings} | ({"gltf": source} if source is not None else {})
+    return Rig(**arrays, name=name, info=info, labels=labels, coarse_faces=coarse)

@@ -961,3 +961,22 @@ def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, mon
     np.testing.assert_allclose(dense.weights.sum(1), 1.0, atol=1e-9)
     result = optimize(dense, particles=8, iterations=2, orient="keep")
     assert result.vertices.shape == V2.shape and result.stats["proxy_faces"] == len(coarse.faces)
+
+
+def test_a_cached_glb_rig_skips_the_print_body_and_follows_a_moved_file(tmp_path, cache):
+    """The second load comes from the cache keyed by the file's bytes, with what writing the posed asset needs."""
+    path = write_gltf(character(helpers=True), tmp_path / "a.glb")
+    first = load(path, cache)
+    steps = []
+    moved = tmp_path / "elsewhere" / "b.glb"
+    moved.parent.mkdir()
+    path.rename(moved)
+    second = load(moved, cache, progress=steps.append)
+    assert not first.info["from_cache"] and second.info["from_cache"]
+    assert steps == []  # neither the skin nor the print body was made again
+    assert second.info["gltf"]["path"] == str(moved)
+    assert second.info["gltf"]["driver"] == first.info["gltf"]["driver"]
+    assert second.labels == first.labels
+    np.testing.assert_array_equal(second.tet_weights, first.tet_weights)
+    # another setting is another entry
+    assert not load(moved, cache, height_mm=50).info["from_cache"]
