@@ -324,7 +324,11 @@ def read_gltf_skin(path) -> GltfSkin:
         One line: unreadable file, compressed meshes, no skin, no triangles, a
         broken node tree or accessor.
     """
-    doc, buffers = _load_document(path)
+    return _skin_of(*_load_document(path), path)
+
+
+def _skin_of(doc, buffers, path) -> GltfSkin:
+    """:func:`read_gltf_skin` of a loaded document."""
     nodes = doc.nodes or []
     if not doc.skins:
         raise InputError(path, "has no skin (no joints); supportless needs a rigged model — rig it (e.g. in "
@@ -604,8 +608,8 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
 
     from .io import atomic_path
 
-    skin = read_gltf_skin(source)
-    doc = pygltflib.GLTF2().load(str(source))
+    doc, buffers = _load_document(source)
+    skin = _skin_of(doc, buffers, source)  # read before the nodes below are changed
     parents = node_parents(doc, source)
     locals_ = np.array([node_local(n) for n in doc.nodes])
     new_global = {int(j): np.asarray(T) @ skin.bind_globals[int(j)] for j, T in zip(joint_nodes, joint_transforms)}

@@ -320,3 +320,19 @@ def test_sparse_skinning_equals_the_dense_product():
     np.testing.assert_allclose(skin(csr_matrix(dense), T), expected, atol=1e-12)
     np.testing.assert_allclose(skin(csr_matrix(dense), T[3]), expected[3], atol=1e-12)
     np.testing.assert_allclose(skin(dense, T), expected, atol=1e-12)
+
+
+def test_sparse_skinning_of_a_planar_rig_equals_the_dense_product():
+    from scipy.sparse import csr_matrix
+
+    from supportless.kinematics import lbs_matrix, skin, stack_transforms
+
+    rng = np.random.default_rng(6)
+    V = rng.normal(size=(30, 2))
+    W = rng.random((30, 4))
+    W /= W.sum(1, keepdims=True)
+    T = rng.normal(size=(5, 4, 2, 3))
+    dense = lbs_matrix(V, W)
+    out = skin(csr_matrix(dense), T)
+    assert out.shape == (5, 30, 2)
+    np.testing.assert_allclose(out, np.matmul(dense, stack_transforms(T)), atol=1e-12)

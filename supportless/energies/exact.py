@@ -36,14 +36,7 @@ def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         For a planar (2D) mesh: its overlaps are areas, measured by
         :func:`supportless.energies.intersection.self_intersection_volume`.
     """
-    V = np.ascontiguousarray(vertices, np.float64)
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise ValueError(f"vertices must be (n, 3) for the exact test, not {V.shape}")
-    import igl
-    import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
-
-    out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True)
-    return np.asarray(out[2], np.int64).reshape(-1, 2)
+    return _detect(vertices, faces, first_only=False)
 
 
 def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
@@ -81,6 +74,11 @@ def self_intersects(vertices: np.ndarray, faces: np.ndarray) -> bool:
     -------
     intersects : bool
     """
+    return len(_detect(vertices, faces, first_only=True)) > 0
+
+
+def _detect(vertices, faces, first_only: bool) -> np.ndarray:
+    """(k, 2) int64 intersecting face pairs from CGAL (only the first found with ``first_only``)."""
     V = np.ascontiguousarray(vertices, np.float64)
     if V.ndim != 2 or V.shape[1] != 3:
         raise ValueError(f"vertices must be (n, 3) for the exact test, not {V.shape}")
@@ -88,5 +86,5 @@ def self_intersects(vertices: np.ndarray, faces: np.ndarray) -> bool:
     import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
 
     out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True,
-                                                       first_only=True)
-    return len(out[2]) > 0
+                                                       first_only=first_only)
+    return np.asarray(out[2], np.int64).reshape(-1, 2)
