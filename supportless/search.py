@@ -398,8 +398,8 @@ def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: floa
     turned = not np.allclose(rotation, np.eye(rig.dim))
     posed = place_on_plate(rig.pose(angles), rig.up)
     R = rotation if turned else None
-    value = float(objective(angles, R))
-    terms = {key: float(v) for key, v in objective.terms(angles, R).items()}
+    value, terms, _ = objective.evaluate(angles, R)
+    value, terms = float(value), {key: float(v) for key, v in terms.items()}
     stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value))
     return PoseResult(angles=angles, vertices=posed, value=value, history=found.history, terms=terms,
                       settings=found.settings, objective=objective, interrupted=found.interrupted, fixed=found.fixed,

@@ -23,20 +23,37 @@ __all__ = ["bone_samples", "refine_triangulation_with_points", "tetrahedralize_s
 TETGEN_FLAGS = "pq2YQ"
 
 
-class _silence_stdout:
-    """Redirect the C-level stdout (TetGen prints even with Q on failure)."""
+class _quiet_scratch:
+    """Run TetGen quietly in a scratch folder.
+
+    TetGen prints to the C-level stdout and stderr even with ``Q`` when it
+    fails, and writes ``tetgen-tmpfile_skipped.*`` into the working folder: both
+    are redirected (to /dev/null, to a temporary folder removed afterwards), so
+    a failure reaches the user as one line and leaves no files behind.
+    """
 
     def __enter__(self):
+        import tempfile
+
         sys.stdout.flush()
-        self._saved = os.dup(1)
+        sys.stderr.flush()
+        self._saved = [os.dup(1), os.dup(2)]
         self._null = os.open(os.devnull, os.O_WRONLY)
         os.dup2(self._null, 1)
+        os.dup2(self._null, 2)
+        self._cwd = os.getcwd()
+        self._tmp = tempfile.TemporaryDirectory(prefix="supportless-tetgen-")
+        os.chdir(self._tmp.name)
         return self
 
     def __exit__(self, *exc):
+        os.chdir(self._cwd)
+        self._tmp.cleanup()
         sys.stdout.flush()
-        os.dup2(self._saved, 1)
-        os.close(self._saved)
+        sys.stderr.flush()
+        for fd, saved in zip((1, 2), self._saved):
+            os.dup2(saved, fd)
+            os.close(saved)
         os.close(self._null)
         return False
 
@@ -72,7 +89,7 @@ def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints
     C = np.ascontiguousarray(joints, np.float64)
     BE = np.ascontiguousarray(bones, np.int64)
     try:
-        with _silence_stdout():
+        with _quiet_scratch():
             TV, TT, _ = igl.copyleft.tetgen.mesh_with_skeleton(
                 V, F, C, np.zeros(0, np.int64), BE, np.zeros((0, 2), np.int64), samples_per_bone, flags
             )
@@ -124,7 +141,7 @@ def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
 
     def run(switches):
         try:
-            with _silence_stdout():
+            with _quiet_scratch():
                 out = igl.copyleft.tetgen.tetrahedralize(V, F, flags=switches)
         except RuntimeError:
             return None

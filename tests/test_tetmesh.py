@@ -1,0 +1,40 @@
+"""TetGen calls (:mod:`supportless.tetmesh`): a failure is one error, with nothing printed or left behind."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshes import box
+from supportless.errors import InputError
+from supportless.tetmesh import tetrahedralize_surface, tetrahedralize_with_skeleton
+
+
+def crossing_boxes():
+    """Two boxes through each other as one surface: TetGen refuses it."""
+    V1, F1 = box((0, 0, 0), (2, 1, 1))
+    V2, F2 = box((0.5, -0.5, 0.25), (1.5, 1.5, 0.75))
+    return np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+
+
+def test_a_failing_tetgen_says_one_line_and_leaves_no_files(tmp_path, monkeypatch, capfd):
+    monkeypatch.chdir(tmp_path)
+    V, F = crossing_boxes()
+    J = np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]])
+    with pytest.raises(InputError, match="TetGen could not"):
+        tetrahedralize_with_skeleton(V, F, J, np.array([[0, 1]]))
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_closed_surface_is_meshed_keeping_its_vertices_first(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    V, F = box((0, 0, 0), (2, 1, 1))
+    TV, TT, conforming = tetrahedralize_surface(V, F)
+    assert conforming
+    np.testing.assert_array_equal(TV[: len(V)], V)
+    a, b, c, d = (TV[TT[:, i]] for i in range(4))
+    volume = np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))).sum() / 6
+    np.testing.assert_allclose(volume, 2.0)
+    assert list(tmp_path.iterdir()) == []
