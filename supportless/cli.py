@@ -121,6 +121,10 @@ def _search_options(f):
 
     d = SearchSettings()
     opts = [
+        click.option("--optimizer", type=click.Choice(["pso", "cma"]), default=d.optimizer, show_default=True,
+                     help="pso: the paper's particle swarm, --particles for --iterations; cma: CMA-ES, "
+                          "--particles/5 samples per generation for --iterations generations (faster, "
+                          "sometimes worse)."),
         click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
         click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
         click.option("--seed", default=d.seed, show_default=True, type=int),

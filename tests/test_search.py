@@ -107,9 +107,11 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     # orient="free": the pose-only phase, then pose and turn (6 iterations each), the best value never rising
     assert len(a.history) == 13 and all(len(v) == 12 for v in a.term_history.values())
     assert np.all(np.diff(a.history) <= 0)
-    assert a.stats["progress_calls"] == 12
+    # the best pose's terms are measured only when the best changed
+    changed = 1 + np.count_nonzero(np.diff(a.history[1:7])) + 1 + np.count_nonzero(np.diff(a.history[7:]))
+    assert 2 <= a.stats["progress_calls"] <= changed
     kept = sl.optimize(rig, particles=12, iterations=6, seed=3, orient="keep")
-    assert len(kept.history) == 7 and kept.stats["progress_calls"] == 6
+    assert len(kept.history) == 7 and 1 <= kept.stats["progress_calls"] <= 6
     assert a.value <= kept.value  # the turning phase starts from the pose-only phase's best
 
 
@@ -301,3 +303,73 @@ def test_a_repeated_search_is_never_worse_than_its_start_pose_and_turn(branch_ri
     again = sl.optimize(branch_rig, particles=6, iterations=0, seed=9, start=first.angles,
                         start_rotation=first.rotation)
     assert again.value <= first.value + 1e-12
+
+
+# --------------------------------------------------------------------------- #
+# CMA-ES (optimizer="cma")
+# --------------------------------------------------------------------------- #
+def test_evolution_strategy_finds_minimum_of_a_quadratic_with_batched_calls():
+    from supportless.search import CMA_SHARE, evolution_strategy
+
+    calls = []
+
+    def f(X):
+        calls.append(X.shape)
+        return sphere(X)
+
+    res = evolution_strategy(f, -np.ones(4), np.ones(4), particles=60, iterations=80, rng=np.random.default_rng(1),
+                             sigma=0.3)
+    np.testing.assert_allclose(res.x, 0.3, atol=1e-3)
+    lam = 60 // CMA_SHARE
+    assert calls[0] == (1, 4) and all(c == (lam, 4) for c in calls[1:])  # the start, then one call per generation
+    assert res.evaluations == 1 + lam * 80 and len(res.history) == 81
+    assert np.all(np.diff(res.history) <= 0)
+
+
+def test_evolution_strategy_respects_bounds_feasibility_and_is_reproducible():
+    from supportless.search import evolution_strategy
+
+    seen = []
+
+    def f(X):
+        seen.append(X.copy())
+        return np.sum((X - 2.0) ** 2, axis=1)  # minimum outside the box: the corner (1, 1, 1)
+
+    def feasible(x):
+        return x[0] <= 0.5  # forbid the corner's x0
+
+    run = dict(particles=40, iterations=60, feasible=feasible, sigma=0.3)
+    a = evolution_strategy(f, -np.ones(3), np.ones(3), rng=np.random.default_rng(2), **run)
+    b = evolution_strategy(f, -np.ones(3), np.ones(3), rng=np.random.default_rng(2), **run)
+    assert np.all(np.vstack(seen) >= -1) and np.all(np.vstack(seen) <= 1)
+    assert a.x[0] <= 0.5 and a.x[0] > 0.4 and np.allclose(a.x[1:], 1.0, atol=1e-2)
+    np.testing.assert_array_equal(a.x, b.x)
+    c = evolution_strategy(f, -np.ones(3), np.ones(3), rng=np.random.default_rng(3), **run)
+    assert not np.array_equal(a.x, c.x)
+
+
+def test_evolution_strategy_never_worse_than_its_initial_positions_and_stops_on_callback():
+    from supportless.search import evolution_strategy
+
+    start = np.array([[0.3, 0.3], [0.9, -0.9]])
+    res = evolution_strategy(sphere, -np.ones(2), np.ones(2), particles=40, iterations=5, initial=start,
+                             rng=np.random.default_rng(0))
+    assert res.value <= 0.0 + 1e-15 and np.allclose(res.x, 0.3)
+    stopped = evolution_strategy(sphere, -np.ones(2), np.ones(2), particles=40, iterations=50,
+                                 rng=np.random.default_rng(0), callback=lambda it, x, v: it < 3)
+    assert stopped.interrupted and len(stopped.history) == 4
+
+
+def test_optimize_with_cma_is_never_worse_than_rest_and_has_no_intersection(branch_rig):
+    from supportless.energies.exact import intersecting_face_pairs
+
+    rig = branch_rig
+    res = sl.optimize(rig, particles=40, iterations=8, seed=0, optimizer="cma")
+    obj = SearchSettings().objective(rig)
+    assert res.value <= float(obj(rig.rest_angles())) + 1e-12
+    assert float(obj(res.angles, res.rotation)) == pytest.approx(res.value, rel=1e-12)
+    assert res.terms["overhang"] < 0.9
+    assert intersecting_face_pairs(rig.pose(res.angles), rig.faces) == 0
+    assert res.settings.optimizer == "cma" and len(res.history) == 17
+    with pytest.raises(ValueError, match="optimizer"):
+        SearchSettings(optimizer="sgd")
