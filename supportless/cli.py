@@ -128,8 +128,13 @@ def _search_options(f):
         click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
         click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
         click.option("--seed", default=d.seed, show_default=True, type=int),
-        click.option("--overhang-angle", default=d.overhang_angle, show_default=True, type=click.FloatRange(0, 90),
-                     help="Overhang threshold, degrees from the build plate."),
+        click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
+                     help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
+                          "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),
+        click.option("--overhang-angle", default=None, type=click.FloatRange(0, 90),
+                     help="Overhang threshold, degrees from the build plate [default: the printer profile's: "
+                          f"support_material_threshold + 1, or PrusaSlicer's automatic one, {d.overhang_angle:.1f} "
+                          "for its defaults]."),
         click.option("--overhang-margin", default=d.overhang_margin, show_default=True,
                      type=click.FloatRange(0, 45),
                      help="The search treats faces up to threshold + margin as needing support, so none "
@@ -164,10 +169,22 @@ def _search_options(f):
     return f
 
 
-def _settings(**options):
-    """The :class:`~supportless.settings.SearchSettings` of the search options."""
+def _printer_profile(path):
+    """The printer profile of ``--printer-profile`` (PrusaSlicer's defaults when None)."""
+    from .profile import default_profile, read_printer_profile
+
+    return default_profile() if path is None else read_printer_profile(path)
+
+
+def _settings(profile=None, **options):
+    """The :class:`~supportless.settings.SearchSettings` of the search options.
+
+    ``overhang_angle=None`` takes the threshold of ``profile``.
+    """
     from .settings import SearchSettings
 
+    if options.get("overhang_angle", 0.0) is None:
+        options["overhang_angle"] = (profile or _printer_profile(None)).overhang_angle
     try:
         return SearchSettings(**options)
     except ValueError as exc:
@@ -297,17 +314,18 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
 
     for path in (output, upright_out):
         _check_mesh_path(path)
-    settings = _settings(**search_options)
+    profile = _printer_profile(search_options.pop("printer_profile"))
+    settings = _settings(profile, **search_options)
     console = _console()
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
     result = _run_search(rig, console, settings, quiet)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
-    report = build_report(rig, result)
+    report = build_report(rig, result) | {"printer_profile": profile.summary()}
     _print_results(console, report)
     _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=upright_out)
     if slice_check_flag:
-        _slice_and_report(rig, result, report, report_path, console)
+        _slice_and_report(rig, result, report, report_path, console, profile=profile)
 
 
 def _print_results(console, report):
@@ -316,7 +334,7 @@ def _print_results(console, report):
     console.print(f"search took {report['runtime_seconds']:.1f} s")
 
 
-def _slice_and_report(rig, result, report, report_path, console, required=True, height_mm=60.0):
+def _slice_and_report(rig, result, report, report_path, console, required=True, height_mm=60.0, profile=None):
     """Slice the rest and the found pose with PrusaSlicer, after every output is written.
 
     The slicer's figures are printed and added to the report file. A missing
@@ -337,14 +355,15 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
     up3 = np.append(rig.up, 0.0) if rig.dim == 2 else rig.up
     try:
         sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=up3,
-                             height_mm=height_mm).to_dict()
+                             height_mm=height_mm, profile=profile).to_dict()
     except SlicerError as exc:
         click.echo(f"supportless: error: slice check failed: {exc}; the other outputs are written", err=True)
         sys.exit(EXIT_MISSING_TOOL)
     red = sliced["reduction_percent"]
     change = "no support before" if red is None else f"{red:.1f} % less"
     console.print(f"PrusaSlicer support filament at {sliced['height_mm']:g} mm tall: "
-                  f"{sliced['before']['support_mm']:.0f} mm -> {sliced['after']['support_mm']:.0f} mm ({change})")
+                  f"{sliced['before']['support_mm']:.0f} mm -> {sliced['after']['support_mm']:.0f} mm ({change}); "
+                  f"{_grams_and_time(sliced['before'])} -> {_grams_and_time(sliced['after'])}")
     if report_path:
         write_json(report_path, report | {"slice_check": sliced})
         console.print(f"  report with the slicer's figures: {report_path}")
@@ -406,6 +425,21 @@ def _check_mesh_path(path) -> None:
         raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS + ('gltf',))}")
 
 
+def _duration(seconds: float) -> str:
+    """``1 h 02 min`` / ``12 min`` / ``40 s`` of a (signed) duration, shown as its size."""
+    seconds = abs(float(seconds))
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    return f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
+
+
+def _grams_and_time(side: dict) -> str:
+    """``6.4 g, 26 min of printing`` of one side of a slice report."""
+    grams = f"{side['support_g']:.1f} g" if side.get("support_g") is not None else "? g"
+    t = side.get("support_time_s")
+    return grams + (f", {_duration(t)} of printing" if t is not None else "")
+
+
 # --------------------------------------------------------------------------- #
 @main.command(name="slice-check")
 @click.argument("original", type=click.Path(dir_okay=False))
@@ -413,17 +447,20 @@ def _check_mesh_path(path) -> None:
 @click.option("--up", default="y", show_default=True, help="Printing direction of both meshes.")
 @click.option("--height-mm", default=60.0, show_default=True, type=click.FloatRange(min=1.0),
               help="The original is scaled to this height along up; the posed mesh by the same factor.")
+@click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
+              help="PrusaSlicer config (.ini) to slice with [default: PrusaSlicer's defaults].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def slice_check_cmd(original, posed, up, height_mm, as_json):
+def slice_check_cmd(original, posed, up, height_mm, printer_profile, as_json):
     """Measure the support PrusaSlicer lays down for ORIGINAL and POSED."""
     from .geometry import parse_up
     from .io import read_mesh
     from .slicer import SlicerError, SlicerNotFound, slice_check
 
     up_vec = parse_up(up)
+    profile = _printer_profile(printer_profile) if printer_profile else None
     meshes = [read_mesh(original), read_mesh(posed)]
     try:
-        report = slice_check(meshes[0], meshes[1], up=up_vec, height_mm=height_mm).to_dict()
+        report = slice_check(meshes[0], meshes[1], up=up_vec, height_mm=height_mm, profile=profile).to_dict()
     except (SlicerNotFound, SlicerError) as exc:
         _fail(str(exc))
     if as_json:
@@ -431,8 +468,11 @@ def slice_check_cmd(original, posed, up, height_mm, as_json):
         return
     b, a = report["before"], report["after"]
     click.echo(f"support filament at {height_mm:g} mm tall (PrusaSlicer):")
-    click.echo(f"  original: {b['support_mm']:8.0f} mm  ({b['support_cm3']:.2f} cm3)")
-    click.echo(f"  posed:    {a['support_mm']:8.0f} mm  ({a['support_cm3']:.2f} cm3)")
+    click.echo(f"  original: {b['support_mm']:8.0f} mm  ({b['support_cm3']:.2f} cm3, {_grams_and_time(b)})")
+    click.echo(f"  posed:    {a['support_mm']:8.0f} mm  ({a['support_cm3']:.2f} cm3, {_grams_and_time(a)})")
+    if b["support_time_s"] is not None and a["support_time_s"] is not None:
+        saved = b["support_time_s"] - a["support_time_s"]
+        click.echo(f"  printing time of the supports: {_duration(saved)} {'less' if saved >= 0 else 'more'}")
     red = report["reduction_percent"]
     click.echo(f"  reduction: {red:.1f} %" if red is not None else "  reduction: n/a (no support before)")
 

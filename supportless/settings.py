@@ -18,18 +18,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective
+from .profile import default_profile
 from .rig import Rig
 
-__all__ = ["ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_bones"]
+__all__ = ["DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "SearchSettings", "angle_layout", "resolve_fixed_bones"]
 
-#: Degrees added to the overhang threshold during the search. A search that
-#: counts faces as risky only up to the printer's threshold parks them just
-#: past it, where a slicer (whose own threshold depends on layer height and
-#: extrusion width: PrusaSlicer's automatic one is about 53 degrees at its
-#: default 0.3 mm layers) still supports them. With a 10 degree margin the
-#: support PrusaSlicer lays down falls 53 % on the bunny instead of 20 %
-#: (benchmarks/RESULTS.md).
-OVERHANG_MARGIN = 10.0
+#: The printer's overhang threshold when no profile is given: PrusaSlicer's
+#: defaults, whose automatic threshold is 53.1 degrees
+#: (:func:`supportless.profile.overhang_threshold`).
+DEFAULT_OVERHANG_ANGLE = default_profile().overhang_angle
+
+#: Degrees added to the printer's threshold during the search. A search that
+#: counts faces as risky only up to the threshold parks them just past it,
+#: where a slicer working layer by layer still supports some of them. The
+#: margin used to be 10 degrees on a 45-degree threshold: most of that was the
+#: gap to PrusaSlicer's real (automatic) threshold of 53.1 degrees, which the
+#: threshold now follows from the profile; 2 degrees remain, so the default
+#: search counts faces up to 55.1 degrees as before (55).
+OVERHANG_MARGIN = 2.0
 
 #: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
 #: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
@@ -76,7 +82,9 @@ class SearchSettings:
         Same seed, same result.
     overhang_angle : float
         The printer's overhang threshold, degrees from the build plate: what
-        reports count as needing support.
+        reports count as needing support (default: PrusaSlicer's automatic
+        threshold at its default profile, :data:`DEFAULT_OVERHANG_ANGLE`; see
+        :attr:`supportless.profile.PrinterProfile.overhang_angle`).
     overhang_margin : float
         The search counts faces up to ``overhang_angle + overhang_margin`` as
         needing support (see :data:`OVERHANG_MARGIN`).
@@ -137,7 +145,7 @@ class SearchSettings:
     particles: int = 200
     iterations: int = 120
     seed: int = 0
-    overhang_angle: float = 45.0
+    overhang_angle: float = DEFAULT_OVERHANG_ANGLE
     overhang_margin: float = OVERHANG_MARGIN
     overhang_model: str = "prism"
     w_arap: float = W_ARAP

@@ -33,12 +33,13 @@ import numpy as np
 
 from .errors import InputError, SupportlessError
 from .io import check_mesh_arrays, read_mesh, write_mesh
+from .profile import DEFAULT_DENSITY, PrinterProfile
 from .report import reduction
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
     "PRUSA_DEFAULTS_CONFIG", "SUPPORT_OPTIONS", "SliceReport", "SlicerError", "SlicerNotFound", "find_prusa_slicer",
-    "mm_to_cm3", "parse_filament_used", "place_vertices", "rotation_to_z", "scale_for_height", "slice_check",
+    "mm_to_cm3", "parse_filament_used", "parse_print_time", "place_vertices", "rotation_to_z", "scale_for_height", "slice_check",
 ]
 
 ENV_VAR = "SUPPORTLESS_PRUSA_SLICER"
@@ -190,6 +191,33 @@ def parse_filament_used(gcode: str) -> tuple[float, float | None]:
     except ValueError:
         cm3 = None
     return mm, cm3
+
+
+_TIME_RE = re.compile(r"^;\s*estimated printing time \(normal mode\)\s*=\s*(.+?)\s*$", re.M)
+_TIME_UNITS = {"d": 86400.0, "h": 3600.0, "m": 60.0, "s": 1.0}
+
+
+def parse_print_time(gcode: str) -> float | None:
+    """PrusaSlicer's estimated printing time, seconds.
+
+    Parameters
+    ----------
+    gcode : str
+        G-code text (its summary at the end is enough).
+
+    Returns
+    -------
+    seconds : float or None
+        ``; estimated printing time (normal mode) = 1d 2h 3m 4s``, or None
+        when the line is missing or unreadable.
+    """
+    m = _TIME_RE.search(gcode)
+    if m is None:
+        return None
+    parts = re.findall(r"(\d+(?:\.\d+)?)\s*([dhms])", m.group(1))
+    if not parts or "".join(v + u for v, u in parts) != re.sub(r"\s+", "", m.group(1)):
+        return None
+    return float(sum(float(v) * _TIME_UNITS[u] for v, u in parts))
 
 
 def _read_gcode_tail(path: Path) -> str:
@@ -428,8 +456,11 @@ def _run_jobs(jobs: list[_Job], workers: int, timeout: float) -> None:
 class SliceReport:
     """Support filament before (original) and after (posed), measured by PrusaSlicer.
 
-    Lengths are mm of filament, volumes cm3; ``total`` is the slice with
-    supports, ``model`` the slice without, support their difference. Sizes
+    Lengths are mm of filament, volumes cm3, masses g (the volume times the
+    profile's filament density, PLA's 1.24 g/cm3 when it gives none), times
+    seconds of PrusaSlicer's estimate; ``total`` is the slice with supports,
+    ``model`` the slice without, support their difference (for the time: the
+    printing time the supports add). Sizes
     are the ``[x, y, z]`` extents in mm on the bed; ``slices`` has the
     filament and seconds of each of the four runs.
     """
@@ -445,6 +476,12 @@ class SliceReport:
     model_mm_after: float
     total_cm3_before: float | None = None
     total_cm3_after: float | None = None
+    support_g_before: float | None = None
+    support_g_after: float | None = None
+    support_time_s_before: float | None = None
+    support_time_s_after: float | None = None
+    filament_density: float = 1.24
+    profile: str = ""
     up: list[float] = field(default_factory=lambda: [0.0, 1.0, 0.0])
     height_mm: float = 60.0
     scale: float = 1.0
@@ -464,15 +501,17 @@ class SliceReport:
         Returns
         -------
         report : dict
-            ``{"before": {"support_mm", "support_cm3", "total_mm", "total_cm3",
-            "model_mm", "size_mm"}, "after": {...}, "reduction_percent", "up",
+            ``{"before": {"support_mm", "support_cm3", "support_g",
+            "support_time_s", "total_mm", "total_cm3", "model_mm", "size_mm"},
+            "after": {...}, "reduction_percent", "up",
             "height_mm", "scale", "filament_diameter_mm", "slicer",
             "slicer_version", "config", "support_options", "slices",
             "elapsed_s"}``; non-finite numbers become None.
         """
         flat = asdict(self)
         d = {side: {key: flat.pop(f"{key}_{side}") for key in
-                    ("support_mm", "support_cm3", "total_mm", "total_cm3", "model_mm", "size_mm")}
+                    ("support_mm", "support_cm3", "support_g", "support_time_s", "total_mm", "total_cm3",
+                     "model_mm", "size_mm")}
              for side in ("before", "after")}
         d.update(flat)
 
@@ -491,7 +530,7 @@ class SliceReport:
 def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float = 60.0,
                 timeout: float = DEFAULT_TIMEOUT_S, *, config: Mapping[str, str] | str | None = None,
                 workers: int | None = None, slicer: str | None = None,
-                keep_dir: str | os.PathLike | None = None) -> SliceReport:
+                keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None) -> SliceReport:
     """Slice the original and the posed mesh with and without supports and compare.
 
     Parameters
@@ -514,6 +553,10 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         The executable (default: :func:`find_prusa_slicer`).
     keep_dir : str or os.PathLike, optional
         Keep the STL, G-code and log files there instead of a temporary folder.
+    profile : PrinterProfile, optional
+        A printer profile read from a file (:func:`supportless.profile.read_printer_profile`):
+        PrusaSlicer loads the file itself (``--load``) and ``config`` is
+        ignored; only the bed is set to fit the meshes.
 
     Returns
     -------
@@ -534,7 +577,10 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         raise SlicerNotFound()
     if height_mm <= 0:
         raise ValueError("height_mm must be positive")
-    if config is None or isinstance(config, str):
+    from_file = profile is not None and profile.path is not None
+    if from_file:
+        config = {}
+    elif config is None or isinstance(config, str):
         name = DEFAULT_PRESET if config is None else config
         if name not in PRESETS:
             raise ValueError(f"unknown slicer config preset {name!r}; choose from {', '.join(PRESETS)}")
@@ -558,32 +604,48 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         work = Path(keep_dir if keep_dir is not None else tmp)
         datadir = work / "prusa-datadir"
         datadir.mkdir(parents=True, exist_ok=True)
-        base = ["--loglevel=1", f"--datadir={datadir}", "--dont-arrange", *_config_args(cfg)]
+        load = ["--load", str(profile.path)] if from_file else []
+        base = ["--loglevel=1", f"--datadir={datadir}", "--dont-arrange", *load, *_config_args(cfg)]
         jobs = []
         for name, (V, F) in meshes.items():
             stl = work / f"{name}.stl"
             write_mesh(stl, V, F)
             for support in (True, False):
                 gcode = work / f"{name}-{'support' if support else 'nosupport'}.gcode"
-                cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ()),
+                cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
                        "--output", str(gcode), str(stl)]
                 jobs.append(_Job(f"{name} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
         _run_jobs(jobs, workers, float(timeout))
         results = {}
         for j in jobs:
-            mm, cm3 = parse_filament_used(_read_gcode_tail(j.gcode))
-            results[j.gcode.stem] = {"filament_mm": mm, "filament_cm3": cm3, "seconds": round(j.elapsed, 3)}
+            tail = _read_gcode_tail(j.gcode)
+            mm, cm3 = parse_filament_used(tail)
+            results[j.gcode.stem] = {"filament_mm": mm, "filament_cm3": cm3, "print_seconds": parse_print_time(tail),
+                                     "seconds": round(j.elapsed, 3)}
 
     def filament(name):
         return results[name]["filament_mm"]
 
+    def added_time(name):
+        t1, t0 = results[f"{name}-support"]["print_seconds"], results[f"{name}-nosupport"]["print_seconds"]
+        return None if t1 is None or t0 is None else t1 - t0
+
     before = filament("original-support") - filament("original-nosupport")
     after = filament("posed-support") - filament("posed-nosupport")
+    diameter = profile.filament_diameter if profile is not None else FILAMENT_DIAMETER_MM
+    density = profile.filament_density if profile is not None else DEFAULT_DENSITY
     return SliceReport(
         support_mm_before=before,
         support_mm_after=after,
-        support_cm3_before=mm_to_cm3(before),
-        support_cm3_after=mm_to_cm3(after),
+        support_cm3_before=mm_to_cm3(before, diameter),
+        support_cm3_after=mm_to_cm3(after, diameter),
+        support_g_before=mm_to_cm3(before, diameter) * density,
+        support_g_after=mm_to_cm3(after, diameter) * density,
+        support_time_s_before=added_time("original"),
+        support_time_s_after=added_time("posed"),
+        filament_density=density,
+        filament_diameter_mm=diameter,
+        profile=profile.path if from_file else "",
         reduction_percent=reduction(before, after),
         total_mm_before=filament("original-support"),
         total_mm_after=filament("posed-support"),
@@ -598,7 +660,7 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         size_mm_after=[float(x) for x in np.ptp(meshes["posed"][0], axis=0)],
         slicer=exe,
         slicer_version=_slicer_version(exe),
-        config=dict(cfg),
+        config=dict(profile.raw) if from_file else dict(cfg),
         support_options=list(SUPPORT_OPTIONS),
         slices=results,
         elapsed_s=time.monotonic() - t0,

@@ -69,7 +69,8 @@ def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(bra
     assert rep["reduction_percent"]["support_prism"] == reduction(rep["before"]["support_prism"],
                                                                    rep["after"]["support_prism"])
     assert rep["after"]["objective"] == pytest.approx(searched.value, rel=1e-12)
-    assert rep["settings"]["overhang_angle"] == 40.0 and rep["settings"]["search_overhang_angle"] == 50.0
+    assert rep["settings"]["overhang_angle"] == 40.0
+    assert rep["settings"]["search_overhang_angle"] == 40.0 + SearchSettings().overhang_margin
     assert rep["settings"]["fixed_bones"] == [int(b) + 1 for b in np.flatnonzero(searched.fixed)]
     assert SearchSettings.from_dict(rep["settings"]) == searched.settings
     assert rep["history"] == [float(v) for v in searched.history]

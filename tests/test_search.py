@@ -97,7 +97,7 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     np.testing.assert_array_equal(a.angles, b.angles)
     assert a.settings == b.settings
     obj = SearchSettings().objective(rig)  # what the search minimises
-    assert obj.overhang_angle == 55.0
+    assert obj.overhang_angle == SearchSettings().search_overhang_angle
     rest = float(obj(rig.rest_angles()))
     assert a.value <= rest + 1e-12
     assert float(obj(a.angles, a.rotation)) == pytest.approx(a.value, rel=1e-12)
@@ -199,9 +199,11 @@ def test_optimize_from_a_start_pose_is_never_worse_than_it(branch_rig):
 
 def test_search_margin_is_one_rule(branch_rig):
     """The search minimises the threshold plus the margin, capped at 89 degrees; the report keeps the printer's."""
-    assert SearchSettings().search_overhang_angle == 55.0
-    assert SearchSettings(overhang_angle=85.0).search_overhang_angle == 89.0
-    assert SearchSettings(overhang_margin=0.0).search_overhang_angle == 45.0
+    # PrusaSlicer's automatic threshold at its defaults, atan(0.3 / 0.225), plus the 2-degree margin
+    assert SearchSettings().overhang_angle == pytest.approx(53.1301, abs=1e-4)
+    assert SearchSettings().search_overhang_angle == pytest.approx(55.1301, abs=1e-4)
+    assert SearchSettings(overhang_angle=88.0).search_overhang_angle == 89.0
+    assert SearchSettings(overhang_margin=0.0, overhang_angle=45.0).search_overhang_angle == 45.0
     res = sl.optimize(branch_rig, particles=8, iterations=2, seed=0, overhang_angle=40.0, overhang_margin=5.0)
     assert res.objective.overhang_angle == 45.0
     assert res.settings.overhang_angle == 40.0
@@ -271,7 +273,7 @@ def test_a_rod_lying_flat_is_turned_to_print_upright(tmp_path):
     turned = sl.optimize(rig, particles=20, iterations=15, seed=0, joint_limit=0.0)
     direction = turned.rotation.T @ rig.up
     assert abs(direction[0]) > 0.99  # printed along its axis
-    rest = sl.overhang_energy(rig.vertices, rig.faces, rig.up, 45.0)
+    rest = sl.overhang_energy(rig.vertices, rig.faces, rig.up, SearchSettings().overhang_angle)
     assert _printed_support(turned, rig) < 1e-6 * rest
     np.testing.assert_array_equal(turned.angles, 0.0)  # every joint held
     kept = sl.optimize(rig, particles=20, iterations=15, seed=0, joint_limit=0.0, orient="keep")

@@ -399,8 +399,11 @@ def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     assert data["before"]["support_mm"] > 0
     assert data["after"]["support_mm"] < data["before"]["support_mm"]
     assert data["reduction_percent"] > 0
+    assert data["before"]["support_g"] == pytest.approx(data["before"]["support_cm3"] * 1.24)
+    assert data["before"]["support_time_s"] > data["after"]["support_time_s"] >= 0
     text = CliRunner().invoke(main, ["slice-check", str(rest), str(posed)])
     assert text.exit_code == 0 and "reduction" in text.output
+    assert " g, " in text.output and "printing time of the supports:" in text.output and "less" in text.output
 
 
 def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monkeypatch):
@@ -414,3 +417,46 @@ def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monke
     assert out.exit_code == 2
     assert "apt-get install prusa-slicer" in out.output
     assert "Traceback" not in out.output
+
+
+def test_parse_print_time():
+    from supportless.slicer import parse_print_time
+
+    assert parse_print_time("; estimated printing time (normal mode) = 1h 1m 31s\n") == 3691.0
+    assert parse_print_time("x\n; estimated printing time (normal mode) = 2d 0h 0m 5s\n") == 2 * 86400 + 5.0
+    assert parse_print_time("; estimated printing time (normal mode) = 42s") == 42.0
+    assert parse_print_time("; filament used [mm] = 3\n") is None
+    assert parse_print_time("; estimated printing time (normal mode) = soon\n") is None
+
+
+# Like STAND_IN_SLICER, and also records its arguments, and prints 100 s per mm of support filament
+STAND_IN_WITH_TIME = STAND_IN_SLICER.replace(
+    'open(out, "w").write(',
+    'open(out + ".args", "w").write("\\n".join(args))\n'
+    't = 600 + 100 * support\n'
+    'open(out, "w").write(f"; estimated printing time (normal mode) = {int(t // 3600)}h {int(t % 3600 // 60)}m '
+    '{int(t % 60)}s\\n" + ')
+
+
+def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path):
+    from supportless.profile import read_printer_profile
+
+    exe = _fake_exe(tmp_path, "stand-in-slicer", STAND_IN_WITH_TIME)
+    ini = tmp_path / "petg.ini"
+    ini.write_text("filament_density = 1.27\nfilament_diameter = 2.85\nsupport_material_threshold = 40\n")
+    profile = read_printer_profile(ini)
+    keep = tmp_path / "keep"
+    V, F = _box_vf()
+    r = slice_check((V, F), (V * [1.0, 0.5, 1.0], F), up=(0, 1, 0), height_mm=3.0, slicer=exe, keep_dir=keep,
+                    profile=profile)
+    args = (keep / "original-support.gcode.args").read_text().splitlines()
+    assert args[args.index("--load") + 1] == str(profile.path)
+    assert "--support-material-threshold=0" not in args  # the built-in preset is not passed over the file
+    assert "--no-support-material" in (keep / "original-nosupport.gcode.args").read_text().splitlines()
+    assert r.support_mm_before == pytest.approx(30.0, abs=1e-4)
+    assert r.support_cm3_before == pytest.approx(mm_to_cm3(30.0, 2.85))
+    assert r.support_g_before == pytest.approx(mm_to_cm3(30.0, 2.85) * 1.27)
+    assert r.support_time_s_before == 3000.0 and r.support_time_s_after == 1500.0
+    assert r.config == profile.raw and r.profile == profile.path
+    d = r.to_dict()
+    assert d["before"]["support_g"] == r.support_g_before and d["after"]["support_time_s"] == 1500.0

@@ -300,7 +300,8 @@ def test_panel_shows_the_objective_its_search_minimises(app, rig):
         expected = float(SearchSettings(w_overhang=3.0, overhang_angle=50.0).objective(rig)(app.state.get_angles()))
         assert app.measures["objective"] == pytest.approx(expected, rel=1e-12)
         assert _number(app.panel.measures.content, "Objective") == pytest.approx(expected, rel=1e-3)
-        assert "faces past 60°" in app.panel.measures.content  # the search's threshold: 50 + margin
+        # the search's threshold: 50 + margin
+        assert f"faces past {50 + defaults.overhang_margin:g}°" in app.panel.measures.content
         # a bone list the rig does not have: a note in the panel, and the search does not start
         assert not app.change_setting("fix", "99")
         assert "out of range 1..3" in app.panel.fixed_info.content
