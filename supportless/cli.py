@@ -306,9 +306,12 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, con
               help="Folder for before/after pictures and the convergence plot.")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
               help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
+@click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Slice up to K distinct good poses the search found (its best among them) with PrusaSlicer, "
+                   "two at a time, and keep the one with the least support (needs prusa-slicer).")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, output, upright_out, report_path, pose,
-             pictures, slice_check_flag, quiet, **search_options):
+             pictures, slice_check_flag, slice_rank_count, quiet, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
 
@@ -317,15 +320,53 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     profile = _printer_profile(search_options.pop("printer_profile"))
     settings = _settings(profile, **search_options)
     console = _console()
+    if slice_rank_count > 1:
+        _require_slicer("--slice-rank")
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
+    if slice_rank_count > 1 and rig.dim != 3:
+        _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     result = _run_search(rig, console, settings, quiet)
     if result.interrupted:
         console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
-    report = build_report(rig, result) | {"printer_profile": profile.summary()}
+    extra = {"printer_profile": profile.summary()}
+    if slice_rank_count > 1 and not result.interrupted:
+        ranked = _slice_rank(rig, result, slice_rank_count, console, profile)
+        result, extra["slice_rank"] = ranked.result, ranked.to_dict()
+    report = build_report(rig, result) | extra
     _print_results(console, report)
     _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=upright_out)
     if slice_check_flag:
         _slice_and_report(rig, result, report, report_path, console, profile=profile)
+
+
+def _require_slicer(option: str) -> None:
+    """Exit with one line (status 3) before any work when PrusaSlicer is missing."""
+    from .slicer import find_prusa_slicer
+
+    if not find_prusa_slicer():
+        click.echo(f"supportless: error: {option} needs PrusaSlicer, which was not found "
+                   "(apt-get install prusa-slicer, or set SUPPORTLESS_PRUSA_SLICER)", err=True)
+        sys.exit(EXIT_MISSING_TOOL)
+
+
+def _slice_rank(rig, result, count, console, profile):
+    """Slice the search's distinct good poses and keep the cheapest (see :func:`supportless.ranking.slice_rank`)."""
+    from .ranking import slice_rank
+    from .slicer import SlicerError
+
+    console.print(f"slicing up to {count} distinct good poses with PrusaSlicer, two at a time ...")
+    try:
+        ranked = slice_rank(rig, result, count, profile=profile)
+    except SlicerError as exc:
+        click.echo(f"supportless: error: slice-ranking failed: {exc}", err=True)
+        sys.exit(EXIT_MISSING_TOOL)
+    for e in ranked.entries:
+        mark = "  <- chosen" if e["chosen"] else ""
+        console.print(f"  pose {e['rank']}: objective {e['value']:.4g}, {e['distance_deg']:.0f} deg from the "
+                      f"search's best, PrusaSlicer support {e['support_mm']:.0f} mm{mark}")
+    if len(ranked.entries) < count:
+        console.print(f"  (only {len(ranked.entries)} distinct good poses without self-intersection)")
+    return ranked
 
 
 def _print_results(console, report):

@@ -3,16 +3,16 @@
 Every error a user can cause (a bad file, a bad option) is raised as an
 :class:`InputError` whose message is one line: which file, what is wrong and
 what to do. The command line prints that line and exits non-zero; it never
-shows a traceback for these. Failures of an outside tool have their own
-subclasses of :class:`SupportlessError` in the module that runs the tool
-(:class:`supportless.slicer.SlicerError` for PrusaSlicer).
+shows a traceback for these. Failures of an outside tool are
+:class:`SlicerError` (PrusaSlicer; :class:`supportless.slicer.SlicerNotFound`
+when it is missing).
 """
 
 from __future__ import annotations
 
 import os
 
-__all__ = ["InputError", "SupportlessError"]
+__all__ = ["InputError", "SlicerError", "SupportlessError"]
 
 
 class SupportlessError(Exception):
@@ -34,3 +34,7 @@ class InputError(SupportlessError, ValueError):
         self.path = None if path is None else os.fspath(path)
         self.reason = message
         super().__init__(f"{self.path}: {message}" if self.path else message)
+
+
+class SlicerError(SupportlessError, RuntimeError):
+    """PrusaSlicer failed, timed out or wrote output that cannot be read; the message is one line."""

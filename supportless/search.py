@@ -19,13 +19,15 @@ import numpy as np
 
 from .energies.exact import self_intersects
 from .geometry import place_on_plate, print_pose
+from .kinematics import euler_to_matrix
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
 from .rig import Rig
 from .settings import PSO_PRESETS, SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
-__all__ = ["CMA_SHARE", "OPTIMIZERS", "PoseResult", "SwarmResult", "TURN_SHARE", "evolution_strategy", "optimize",
+__all__ = ["CANDIDATE_TOLERANCE", "CMA_SHARE", "DISTINCT_DEGREES", "OPTIMIZERS", "PoseResult", "SwarmResult", "TURN_SHARE",
+           "distinct_candidates", "evolution_strategy", "optimize", "pose_distance_deg",
            "particle_swarm"]
 
 #: With ``orient="free"`` the search runs the pose-only swarm, then a swarm of
@@ -49,6 +51,12 @@ class SwarmResult:
     evaluations : int
     interrupted : bool
         True if the search was stopped early (Ctrl-C or the stop callback).
+    candidates_x : (q, k) float64
+        Other good positions, for a second opinion on the best (e.g. a
+        slicer's): the swarm's personal bests, or the best samples CMA-ES
+        computed exactly. Their values may not have passed ``feasible``.
+    candidates_values : (q,) float64
+        Their objective values.
     """
 
     x: np.ndarray
@@ -56,6 +64,8 @@ class SwarmResult:
     history: np.ndarray
     evaluations: int
     interrupted: bool = False
+    candidates_x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    candidates_values: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray, *,
@@ -150,7 +160,7 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
                 break
     except KeyboardInterrupt:
         interrupted = True
-    return SwarmResult(g_x, g_f, np.asarray(history), evaluations, interrupted)
+    return SwarmResult(g_x, g_f, np.asarray(history), evaluations, interrupted, best_X, best_f)
 
 
 #: CMA-ES samples ``particles // CMA_SHARE`` poses per generation for
@@ -229,6 +239,7 @@ def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray,
         return cma.CMAEvolutionStrategy(np.clip((x0 - lower) / span, 0.0, 1.0), sigma, options)
 
     es = strategy(g_x)
+    archive_x, archive_f = [X], [values]
     interrupted = False
     try:
         for it in range(iterations):
@@ -242,6 +253,9 @@ def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray,
             i = int(np.argmin(values))
             if values[i] < g_f:
                 g_x, g_f = X[i].copy(), float(values[i])
+            exact = np.isfinite(values) & (values < bound)
+            archive_x.append(X[exact])
+            archive_f.append(values[exact])
             finite = np.isfinite(values)
             ranked = np.where(finite, values, values[finite].max() + 1.0 if finite.any() else 0.0)
             es.tell(list(Z), ranked.tolist())
@@ -252,8 +266,19 @@ def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray,
                 break
     except KeyboardInterrupt:
         interrupted = True
-    return SwarmResult(g_x, g_f, np.asarray(history), evaluations, interrupted)
+    cand_x, cand_f = np.concatenate(archive_x), np.concatenate(archive_f)
+    keep = np.argsort(cand_f, kind="stable")[:particles]
+    return SwarmResult(g_x, g_f, np.asarray(history), evaluations, interrupted, cand_x[keep], cand_f[keep])
 
+
+#: Two poses closer than this (degrees, the largest rotation of a bone or of
+#: the print rotation between them) are near-copies for
+#: :func:`distinct_candidates`.
+DISTINCT_DEGREES = 10.0
+
+#: :func:`distinct_candidates` keeps alternatives whose objective is at most
+#: this share above the best's: they distort the model about as little.
+CANDIDATE_TOLERANCE = 0.25
 
 #: The searches :func:`optimize` can run (``SearchSettings.optimizer``).
 OPTIMIZERS = {"cma": evolution_strategy, "pso": particle_swarm}
@@ -316,6 +341,11 @@ class PoseResult:
         The posed surface in the print frame: ``vertices`` turned by R
         (:func:`supportless.geometry.print_pose`), on the plate. This is
         the mesh to slice.
+    candidates : dict
+        Other good poses the last phase of the search reached, best first:
+        ``angles`` (q, m, 3) float64, ``rotations`` (q, d, d) float64 and
+        ``values`` (q,) float64 (objective values; not checked for exact
+        self-intersection). See :func:`distinct_candidates`.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.build_report`): it measures the rest pose and
@@ -336,6 +366,7 @@ class PoseResult:
     stats: dict = field(default_factory=dict)
     rotation: np.ndarray | None = None
     print_vertices: np.ndarray | None = None
+    candidates: dict = field(default_factory=dict)
 
     def __post_init__(self):
         if self.rotation is None:
@@ -494,13 +525,100 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     _, to_angles, to_rotation = variables(turned)
     angles = to_angles(swarm.x[None])[0]
     rotation = to_rotation(swarm.x)
+    candidates = _candidates(swarm, to_angles, to_rotation)
     posed = place_on_plate(rig.pose(angles), rig.up)
     terms = {key: float(v) for key, v in objective.terms(angles, rotation if turned else None).items()}
     return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=np.asarray(history),
                       terms=terms, settings=settings, objective=objective, interrupted=swarm.interrupted,
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
                       stats=stats, rotation=rotation,
-                      print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
+                      print_vertices=print_pose(posed, rotation, rig.up) if turned else posed,
+                      candidates=candidates)
+
+
+def _candidates(swarm: SwarmResult, to_angles, to_rotation) -> dict:
+    """The best position and the optimiser's other good positions as poses, best first (see PoseResult)."""
+    X = np.vstack([swarm.x[None], swarm.candidates_x]) if len(swarm.candidates_x) else swarm.x[None]
+    values = np.concatenate([[swarm.value], swarm.candidates_values])
+    finite = np.isfinite(values)
+    X, values = X[finite], values[finite]
+    order = np.argsort(values, kind="stable")
+    X, values = X[order], values[order]
+    rotations = np.stack([to_rotation(x) for x in X]) if len(X) else np.zeros((0, 3, 3))
+    return {"angles": to_angles(X), "rotations": rotations, "values": values}
+
+
+def pose_distance_deg(angles_a: np.ndarray, rotation_a: np.ndarray, angles_b: np.ndarray,
+                      rotation_b: np.ndarray) -> float:
+    """How far apart two poses are: the largest rotation between them, of one bone or of the print rotation.
+
+    Parameters
+    ----------
+    angles_a, angles_b : (m, 3) float64
+        Relative XYZ Euler angles, radians.
+    rotation_a, rotation_b : (d, d) float64
+        Print rotations.
+
+    Returns
+    -------
+    degrees : float
+        ``max(max_i angle(R_a,i^T R_b,i), angle(Q_a^T Q_b))``, each the
+        geodesic angle of a rotation, in degrees.
+    """
+    def geodesic(R):
+        return np.degrees(np.arccos(np.clip((np.trace(R, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)))
+
+    Ra = euler_to_matrix(np.asarray(angles_a, np.float64))
+    Rb = euler_to_matrix(np.asarray(angles_b, np.float64))
+    bones = geodesic(np.swapaxes(Ra, -1, -2) @ Rb)
+    Qa, Qb = np.asarray(rotation_a, np.float64), np.asarray(rotation_b, np.float64)
+    if Qa.shape[0] == 2:  # planar: embed the 2D turn in 3D
+        Qa, Qb = np.pad(Qa, (0, 1)), np.pad(Qb, (0, 1))
+        Qa[2, 2] = Qb[2, 2] = 1.0
+    turn = geodesic(Qa.T @ Qb)
+    return float(max(bones.max(initial=0.0), turn))
+
+
+def distinct_candidates(candidates: dict, count: int, min_degrees: float = DISTINCT_DEGREES,
+                        tolerance: float = CANDIDATE_TOLERANCE,
+                        accept: Callable[[np.ndarray, np.ndarray], bool] | None = None) -> list[int]:
+    """Up to ``count`` good poses that differ: greedy, best first.
+
+    Parameters
+    ----------
+    candidates : dict
+        :attr:`PoseResult.candidates` (sorted best first).
+    count : int
+        How many poses at most.
+    min_degrees : float
+        A pose is kept only if it is at least this far (:func:`pose_distance_deg`)
+        from every pose kept before it: near-copies of one local optimum count once.
+    tolerance : float
+        Only poses with an objective value at most ``(1 + tolerance)`` times
+        the best's (the least distorted alternatives; the best is always kept).
+    accept : callable, optional
+        ``accept(angles (m, 3), rotation (d, d)) -> bool``, a hard rule to
+        pass (e.g. no exact self-intersection), asked only about poses that
+        would be kept otherwise; the first pose (the search's result) is
+        kept without asking.
+
+    Returns
+    -------
+    indices : list of int
+        Indices into the candidates, the first one 0.
+    """
+    A, Q, values = candidates["angles"], candidates["rotations"], candidates["values"]
+    if len(values) == 0 or count < 1:
+        return []
+    limit = values[0] + abs(values[0]) * float(tolerance)
+    kept = [0]
+    for i in range(1, len(values)):
+        if len(kept) >= count or values[i] > limit:
+            break
+        if all(pose_distance_deg(A[i], Q[i], A[j], Q[j]) >= min_degrees for j in kept) and \
+                (accept is None or accept(A[i], Q[i])):
+            kept.append(i)
+    return kept
 
 
 def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
@@ -515,4 +633,5 @@ def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: floa
     return PoseResult(angles=angles, vertices=posed, value=value, history=found.history, terms=terms,
                       settings=found.settings, objective=objective, interrupted=found.interrupted, fixed=found.fixed,
                       term_history=found.term_history, runtime_seconds=time.perf_counter() - t0, stats=stats,
-                      rotation=rotation, print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
+                      rotation=rotation, print_vertices=print_pose(posed, rotation, rig.up) if turned else posed,
+                      candidates=found.candidates)

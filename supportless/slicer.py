@@ -31,19 +31,20 @@ from typing import Mapping, Sequence, Union
 
 import numpy as np
 
-from .errors import InputError, SupportlessError
+from .errors import InputError, SlicerError
+from .gcode import FILAMENT_DIAMETER_MM, mm_to_cm3, parse_filament_used, parse_print_time, read_gcode_tail
 from .io import check_mesh_arrays, read_mesh, write_mesh
 from .profile import DEFAULT_DENSITY, PrinterProfile
 from .report import reduction
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
-    "PRUSA_DEFAULTS_CONFIG", "SUPPORT_OPTIONS", "SliceReport", "SlicerError", "SlicerNotFound", "find_prusa_slicer",
-    "mm_to_cm3", "parse_filament_used", "parse_print_time", "place_vertices", "rotation_to_z", "scale_for_height", "slice_check",
+    "PRUSA_DEFAULTS_CONFIG", "SUPPORT_OPTIONS", "SliceReport", "SlicerError", "SlicerNotFound", "SupportSlices",
+    "find_prusa_slicer", "mm_to_cm3", "parse_filament_used", "parse_print_time", "place_vertices", "rotation_to_z",
+    "scale_for_height", "slice_check", "slice_support",
 ]
 
 ENV_VAR = "SUPPORTLESS_PRUSA_SLICER"
-FILAMENT_DIAMETER_MM = 1.75
 DEFAULT_TIMEOUT_S = 300.0
 
 #: Generic PLA profile: 0.4 mm nozzle, 0.2 mm layers, 2 perimeters, 15 % infill,
@@ -91,10 +92,6 @@ DEFAULT_PRESET = "prusa-defaults"
 SUPPORT_OPTIONS: tuple[str, ...] = ("--support-material", "--support-material-auto")
 
 MeshLike = Union[str, os.PathLike, tuple]
-
-
-class SlicerError(SupportlessError, RuntimeError):
-    """PrusaSlicer failed or timed out; the message is one line."""
 
 
 class SlicerNotFound(SlicerError):
@@ -145,104 +142,6 @@ def _slicer_version(exe: str) -> str:
         if line and not _LOG_PREFIX_RE.match(line):
             return line.split(" based on")[0]
     return "unknown"
-
-
-# --------------------------------------------------------------------------- #
-# G-code and units
-# --------------------------------------------------------------------------- #
-_FILAMENT_RE = {unit: re.compile(rf"^;\s*filament used \[{unit}\]\s*=\s*(.+?)\s*$", re.M) for unit in ("mm", "cm3")}
-
-
-def _sum_values(text: str) -> float:
-    # multi-extruder G-code lists one value per extruder, comma separated
-    return float(sum(float(v) for v in text.split(",") if v.strip()))
-
-
-def parse_filament_used(gcode: str) -> tuple[float, float | None]:
-    """Filament length and volume from PrusaSlicer G-code.
-
-    Parameters
-    ----------
-    gcode : str
-        G-code text (the end of the file, where PrusaSlicer writes its summary, is enough).
-
-    Returns
-    -------
-    mm : float
-        ``; filament used [mm]``, summed over extruders.
-    cm3 : float or None
-        ``; filament used [cm3]``, or None when the line is missing or unreadable.
-
-    Raises
-    ------
-    SlicerError
-        When there is no readable ``; filament used [mm]`` line.
-    """
-    m = _FILAMENT_RE["mm"].search(gcode)
-    if m is None:
-        raise SlicerError("PrusaSlicer G-code has no '; filament used [mm]' line")
-    try:
-        mm = _sum_values(m.group(1))
-    except ValueError:
-        raise SlicerError(f"cannot read filament length from G-code line: {m.group(0).strip()!r}") from None
-    c = _FILAMENT_RE["cm3"].search(gcode)
-    try:
-        cm3 = None if c is None else _sum_values(c.group(1))
-    except ValueError:
-        cm3 = None
-    return mm, cm3
-
-
-_TIME_RE = re.compile(r"^;\s*estimated printing time \(normal mode\)\s*=\s*(.+?)\s*$", re.M)
-_TIME_UNITS = {"d": 86400.0, "h": 3600.0, "m": 60.0, "s": 1.0}
-
-
-def parse_print_time(gcode: str) -> float | None:
-    """PrusaSlicer's estimated printing time, seconds.
-
-    Parameters
-    ----------
-    gcode : str
-        G-code text (its summary at the end is enough).
-
-    Returns
-    -------
-    seconds : float or None
-        ``; estimated printing time (normal mode) = 1d 2h 3m 4s``, or None
-        when the line is missing or unreadable.
-    """
-    m = _TIME_RE.search(gcode)
-    if m is None:
-        return None
-    parts = re.findall(r"(\d+(?:\.\d+)?)\s*([dhms])", m.group(1))
-    if not parts or "".join(v + u for v, u in parts) != re.sub(r"\s+", "", m.group(1)):
-        return None
-    return float(sum(float(v) * _TIME_UNITS[u] for v, u in parts))
-
-
-def _read_gcode_tail(path: Path) -> str:
-    """The last 400 kB of a G-code file: the summary comes before the embedded config."""
-    with open(path, "rb") as fh:
-        fh.seek(max(0, path.stat().st_size - 400_000))
-        return fh.read().decode("utf-8", errors="replace")
-
-
-def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:
-    """Volume of a length of filament.
-
-    Parameters
-    ----------
-    mm : float
-        Filament length in mm.
-    diameter_mm : float
-        Filament diameter in mm.
-
-    Returns
-    -------
-    cm3 : float
-        ``mm * pi * (diameter_mm / 2)**2 / 1000``.
-    """
-    return mm * math.pi * (diameter_mm / 2.0) ** 2 / 1000.0
 
 
 # --------------------------------------------------------------------------- #
@@ -527,6 +426,119 @@ class SliceReport:
         return clean(d)
 
 
+@dataclass
+class SupportSlices:
+    """PrusaSlicer's support for several meshes placed alike (:func:`slice_support`).
+
+    ``meshes[i]`` holds mesh ``i``'s runs ``{"support": {...}, "nosupport": {...}}``
+    (each ``filament_mm``, ``filament_cm3``, ``print_seconds``, ``seconds``),
+    ``support_mm`` (with minus without), ``size_mm`` (its ``[x, y, z]`` extent
+    on the bed); ``slicer`` is the executable and ``config`` the options given
+    on its command line.
+    """
+
+    meshes: list[dict]
+    slicer: str
+    config: dict[str, str]
+
+    @property
+    def support_mm(self) -> list[float]:
+        """Support filament of each mesh, mm."""
+        return [m["support_mm"] for m in self.meshes]
+
+
+def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float, timeout: float = DEFAULT_TIMEOUT_S,
+                  *, config: Mapping[str, str] | str | None = None, workers: int | None = None,
+                  slicer: str | None = None, keep_dir: str | os.PathLike | None = None,
+                  profile: PrinterProfile | None = None, names: Sequence[str] | None = None) -> SupportSlices:
+    """Slice meshes with and without supports; the support filament of each.
+
+    Parameters
+    ----------
+    meshes : sequence of str or os.PathLike or tuple
+        Mesh files or ``(V (n, 3) float64, F (f, 3) int64)`` pairs, in model units.
+    up : (3,) float
+        Their printing direction; it becomes +Z on the bed.
+    scale : float
+        Model units to mm, the same for every mesh
+        (:func:`scale_for_height` of the reference mesh).
+    timeout : float
+        Seconds allowed for each PrusaSlicer run.
+    config, workers, slicer, keep_dir, profile
+        As in :func:`slice_check`.
+    names : sequence of str, optional
+        Labels of the meshes in file names and messages (default ``mesh-0`` ...).
+
+    Returns
+    -------
+    slices : SupportSlices
+
+    Raises
+    ------
+    SlicerNotFound, SlicerError, InputError
+        As :func:`slice_check`.
+    """
+    exe = slicer or find_prusa_slicer()
+    if exe is None:
+        raise SlicerNotFound()
+    if not scale > 0:
+        raise ValueError("scale must be positive")
+    names = list(names) if names is not None else [f"mesh-{i}" for i in range(len(meshes))]
+    if len(names) != len(meshes):
+        raise ValueError("names must have one label per mesh")
+    from_file = profile is not None and profile.path is not None
+    if from_file:
+        config = {}
+    elif config is None or isinstance(config, str):
+        name = DEFAULT_PRESET if config is None else config
+        if name not in PRESETS:
+            raise ValueError(f"unknown slicer config preset {name!r}; choose from {', '.join(PRESETS)}")
+        config = PRESETS[name]
+    cfg = {k.replace("_", "-"): (v if isinstance(v, bool) else str(v)) for k, v in config.items()}
+    placed = []
+    for label, mesh in zip(names, meshes):
+        V, F = _load_mesh(mesh, label)
+        placed.append((place_vertices(V, up, scale), F))
+    ext = np.max([np.ptp(V, axis=0) for V, _ in placed], axis=0)
+    # a bed big enough for every mesh, at least an MK3's 250 x 210 mm, each centred on it
+    bed_x, bed_y = float(max(250.0, math.ceil(ext[0] + 20.0))), float(max(210.0, math.ceil(ext[1] + 20.0)))
+    for V, _ in placed:
+        V[:, :2] += (bed_x / 2.0, bed_y / 2.0)
+    cfg.setdefault("bed-shape", f"0x0,{bed_x:g}x0,{bed_x:g}x{bed_y:g},0x{bed_y:g}")
+    cfg.setdefault("max-print-height", f"{max(210.0, math.ceil(ext[2] + 10.0)):g}")
+    workers = workers or max(1, min(4, os.cpu_count() or 1))
+
+    with tempfile.TemporaryDirectory(prefix="supportless-slice-") as tmp:
+        work = Path(keep_dir if keep_dir is not None else tmp)
+        datadir = work / "prusa-datadir"
+        datadir.mkdir(parents=True, exist_ok=True)
+        load = ["--load", str(profile.path)] if from_file else []
+        base = ["--loglevel=1", f"--datadir={datadir}", "--dont-arrange", *load, *_config_args(cfg)]
+        jobs = []
+        for label, (V, F) in zip(names, placed):
+            stl = work / f"{label}.stl"
+            write_mesh(stl, V, F)
+            for support in (True, False):
+                gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
+                cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
+                       "--output", str(gcode), str(stl)]
+                jobs.append(_Job(f"{label} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
+        _run_jobs(jobs, workers, float(timeout))
+        runs = []
+        for j in jobs:
+            tail = read_gcode_tail(j.gcode)
+            mm, cm3 = parse_filament_used(tail)
+            runs.append({"filament_mm": mm, "filament_cm3": cm3, "print_seconds": parse_print_time(tail),
+                         "seconds": round(j.elapsed, 3)})
+    out = []
+    for i, (V, _) in enumerate(placed):
+        with_, without = runs[2 * i], runs[2 * i + 1]
+        out.append({"support": with_, "nosupport": without,
+                    "support_mm": with_["filament_mm"] - without["filament_mm"],
+                    "size_mm": [float(x) for x in np.ptp(V, axis=0)]})
+    return SupportSlices(meshes=out, slicer=exe, config=cfg)
+
+
 def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float = 60.0,
                 timeout: float = DEFAULT_TIMEOUT_S, *, config: Mapping[str, str] | str | None = None,
                 workers: int | None = None, slicer: str | None = None,
@@ -577,51 +589,16 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         raise SlicerNotFound()
     if height_mm <= 0:
         raise ValueError("height_mm must be positive")
-    from_file = profile is not None and profile.path is not None
-    if from_file:
-        config = {}
-    elif config is None or isinstance(config, str):
-        name = DEFAULT_PRESET if config is None else config
-        if name not in PRESETS:
-            raise ValueError(f"unknown slicer config preset {name!r}; choose from {', '.join(PRESETS)}")
-        config = PRESETS[name]
-    cfg = {k.replace("_", "-"): (v if isinstance(v, bool) else str(v)) for k, v in config.items()}
-
     Vo, Fo = _load_mesh(original, "original")
     Vp, Fp = _load_mesh(posed, "posed")
     s = scale_for_height(Vo, up, height_mm)
-    meshes = {"original": (place_vertices(Vo, up, s), Fo), "posed": (place_vertices(Vp, up, s), Fp)}
-    ext = np.maximum(np.ptp(meshes["original"][0], axis=0), np.ptp(meshes["posed"][0], axis=0))
-    # a bed big enough for either mesh, at least an MK3's 250 x 210 mm, both centred on it
-    bed_x, bed_y = float(max(250.0, math.ceil(ext[0] + 20.0))), float(max(210.0, math.ceil(ext[1] + 20.0)))
-    for V, _ in meshes.values():
-        V[:, :2] += (bed_x / 2.0, bed_y / 2.0)
-    cfg.setdefault("bed-shape", f"0x0,{bed_x:g}x0,{bed_x:g}x{bed_y:g},0x{bed_y:g}")
-    cfg.setdefault("max-print-height", f"{max(210.0, math.ceil(ext[2] + 10.0)):g}")
-    workers = workers or max(1, min(4, os.cpu_count() or 1))
-
-    with tempfile.TemporaryDirectory(prefix="supportless-slice-") as tmp:
-        work = Path(keep_dir if keep_dir is not None else tmp)
-        datadir = work / "prusa-datadir"
-        datadir.mkdir(parents=True, exist_ok=True)
-        load = ["--load", str(profile.path)] if from_file else []
-        base = ["--loglevel=1", f"--datadir={datadir}", "--dont-arrange", *load, *_config_args(cfg)]
-        jobs = []
-        for name, (V, F) in meshes.items():
-            stl = work / f"{name}.stl"
-            write_mesh(stl, V, F)
-            for support in (True, False):
-                gcode = work / f"{name}-{'support' if support else 'nosupport'}.gcode"
-                cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
-                       "--output", str(gcode), str(stl)]
-                jobs.append(_Job(f"{name} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
-        _run_jobs(jobs, workers, float(timeout))
-        results = {}
-        for j in jobs:
-            tail = _read_gcode_tail(j.gcode)
-            mm, cm3 = parse_filament_used(tail)
-            results[j.gcode.stem] = {"filament_mm": mm, "filament_cm3": cm3, "print_seconds": parse_print_time(tail),
-                                     "seconds": round(j.elapsed, 3)}
+    sliced = slice_support([(Vo, Fo), (Vp, Fp)], up, s, timeout, config=config, workers=workers, slicer=exe,
+                           keep_dir=keep_dir, profile=profile, names=("original", "posed"))
+    cfg = sliced.config
+    from_file = profile is not None and profile.path is not None
+    results = {f"{name}-{kind}": run[kind] for name, run in zip(("original", "posed"), sliced.meshes)
+               for kind in ("support", "nosupport")}
+    meshes = {"original": sliced.meshes[0], "posed": sliced.meshes[1]}
 
     def filament(name):
         return results[name]["filament_mm"]
@@ -656,8 +633,8 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         up=[float(x) for x in np.asarray(up, dtype=float).reshape(3)],
         height_mm=float(height_mm),
         scale=s,
-        size_mm_before=[float(x) for x in np.ptp(meshes["original"][0], axis=0)],
-        size_mm_after=[float(x) for x in np.ptp(meshes["posed"][0], axis=0)],
+        size_mm_before=meshes["original"]["size_mm"],
+        size_mm_after=meshes["posed"]["size_mm"],
         slicer=exe,
         slicer_version=_slicer_version(exe),
         config=dict(profile.raw) if from_file else dict(cfg),

@@ -375,3 +375,74 @@ def test_optimize_with_cma_is_never_worse_than_rest_and_has_no_intersection(bran
     assert res.settings.optimizer == "cma" and len(res.history) == 17
     with pytest.raises(ValueError, match="optimizer"):
         SearchSettings(optimizer="sgd")
+
+
+# --- distinct good poses (for slice-ranking) ----------------------------------
+
+
+def test_pose_distance_is_the_largest_bone_or_print_rotation():
+    from supportless.search import pose_distance_deg
+
+    a = np.zeros((3, 3))
+    b = a.copy()
+    b[1, 0] = np.radians(30.0)  # one bone turned 30 deg about x
+    b[2, 2] = np.radians(-12.0)
+    eye = np.eye(3)
+    assert pose_distance_deg(a, eye, b, eye) == pytest.approx(30.0)
+    assert pose_distance_deg(b, eye, a, eye) == pytest.approx(30.0)  # symmetric
+    c = np.cos(np.radians(50.0))
+    s = np.sin(np.radians(50.0))
+    Q = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    assert pose_distance_deg(a, eye, b, Q) == pytest.approx(50.0)  # the turn dominates
+    Q2 = np.array([[c, -s], [s, c]])
+    assert pose_distance_deg(a, np.eye(2), a, Q2) == pytest.approx(50.0)  # planar turns too
+
+
+def _candidates(angles_deg, values):
+    A = np.radians(np.asarray(angles_deg, float))
+    return {"angles": A, "rotations": np.repeat(np.eye(3)[None], len(A), 0), "values": np.asarray(values, float)}
+
+
+def test_distinct_candidates_skip_near_copies_and_poor_poses():
+    from supportless.search import distinct_candidates, pose_distance_deg
+
+    poses = np.zeros((6, 2, 3))
+    poses[1, 0, 0] = 3.0    # a near-copy of the best
+    poses[2, 0, 0] = 25.0   # another optimum
+    poses[3, 1, 1] = 40.0   # a third
+    poses[4, 1, 1] = -40.0  # a fourth, but 80 % worse than the best
+    poses[5, 0, 2] = 60.0
+    cand = _candidates(poses, [1.0, 1.01, 1.05, 1.2, 1.8, 1.9])
+    kept = distinct_candidates(cand, 4, min_degrees=10.0, tolerance=0.25)
+    assert kept == [0, 2, 3]
+    for i in kept:
+        for j in kept:
+            if i < j:
+                assert pose_distance_deg(cand["angles"][i], np.eye(3), cand["angles"][j], np.eye(3)) >= 10.0
+    assert distinct_candidates(cand, 2, 10.0, 0.25) == [0, 2]
+    assert distinct_candidates(cand, 4, 1.0, 0.25) == [0, 1, 2, 3]  # a small distance keeps the copy
+    # a hard rule: the rejected pose is skipped, the first pose is never asked about
+    asked = []
+
+    def accept(A, Q):
+        asked.append(np.degrees(A).round().tolist())
+        return A[0, 0] == 0.0
+
+    assert distinct_candidates(cand, 4, 10.0, 0.25, accept=accept) == [0, 3]
+    assert len(asked) == 2
+
+
+def test_search_result_carries_its_candidates_best_first(branch_rig):
+    from supportless.search import distinct_candidates
+
+    res = sl.optimize(branch_rig, particles=24, iterations=10, seed=0, orient="keep")
+    c = res.candidates
+    assert len(c["values"]) >= 2 and c["angles"].shape[1:] == (branch_rig.bone_count, 3)
+    assert np.all(np.diff(c["values"]) >= 0)
+    np.testing.assert_allclose(c["angles"][0], res.angles)
+    assert c["values"][0] == pytest.approx(res.value)
+    # each candidate's value is its objective
+    for i in range(min(3, len(c["values"]))):
+        assert float(res.objective(c["angles"][i][None])[0]) == pytest.approx(c["values"][i], rel=1e-9)
+    kept = distinct_candidates(c, 3, tolerance=10.0)
+    assert kept[0] == 0 and len(set(kept)) == len(kept)

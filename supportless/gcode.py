@@ -1,0 +1,113 @@
+"""Reading PrusaSlicer's G-code summary: filament used and printing time; filament units.
+
+Pure text functions (no slicer is run here): :mod:`supportless.slicer` runs
+PrusaSlicer and reads its output with them.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from .errors import SlicerError
+
+__all__ = ["FILAMENT_DIAMETER_MM", "mm_to_cm3", "parse_filament_used", "parse_print_time", "read_gcode_tail"]
+
+#: The filament diameter when a profile gives none, mm.
+FILAMENT_DIAMETER_MM = 1.75
+
+
+_FILAMENT_RE = {unit: re.compile(rf"^;\s*filament used \[{unit}\]\s*=\s*(.+?)\s*$", re.M) for unit in ("mm", "cm3")}
+
+
+def _sum_values(text: str) -> float:
+    # multi-extruder G-code lists one value per extruder, comma separated
+    return float(sum(float(v) for v in text.split(",") if v.strip()))
+
+
+def parse_filament_used(gcode: str) -> tuple[float, float | None]:
+    """Filament length and volume from PrusaSlicer G-code.
+
+    Parameters
+    ----------
+    gcode : str
+        G-code text (the end of the file, where PrusaSlicer writes its summary, is enough).
+
+    Returns
+    -------
+    mm : float
+        ``; filament used [mm]``, summed over extruders.
+    cm3 : float or None
+        ``; filament used [cm3]``, or None when the line is missing or unreadable.
+
+    Raises
+    ------
+    SlicerError
+        When there is no readable ``; filament used [mm]`` line.
+    """
+    m = _FILAMENT_RE["mm"].search(gcode)
+    if m is None:
+        raise SlicerError("PrusaSlicer G-code has no '; filament used [mm]' line")
+    try:
+        mm = _sum_values(m.group(1))
+    except ValueError:
+        raise SlicerError(f"cannot read filament length from G-code line: {m.group(0).strip()!r}") from None
+    c = _FILAMENT_RE["cm3"].search(gcode)
+    try:
+        cm3 = None if c is None else _sum_values(c.group(1))
+    except ValueError:
+        cm3 = None
+    return mm, cm3
+
+
+_TIME_RE = re.compile(r"^;\s*estimated printing time \(normal mode\)\s*=\s*(.+?)\s*$", re.M)
+_TIME_UNITS = {"d": 86400.0, "h": 3600.0, "m": 60.0, "s": 1.0}
+
+
+def parse_print_time(gcode: str) -> float | None:
+    """PrusaSlicer's estimated printing time, seconds.
+
+    Parameters
+    ----------
+    gcode : str
+        G-code text (its summary at the end is enough).
+
+    Returns
+    -------
+    seconds : float or None
+        ``; estimated printing time (normal mode) = 1d 2h 3m 4s``, or None
+        when the line is missing or unreadable.
+    """
+    m = _TIME_RE.search(gcode)
+    if m is None:
+        return None
+    parts = re.findall(r"(\d+(?:\.\d+)?)\s*([dhms])", m.group(1))
+    if not parts or "".join(v + u for v, u in parts) != re.sub(r"\s+", "", m.group(1)):
+        return None
+    return float(sum(float(v) * _TIME_UNITS[u] for v, u in parts))
+
+
+def read_gcode_tail(path: Path) -> str:
+    """The last 400 kB of a G-code file: the summary comes before the embedded config."""
+    with open(path, "rb") as fh:
+        fh.seek(max(0, path.stat().st_size - 400_000))
+        return fh.read().decode("utf-8", errors="replace")
+
+
+def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:
+    """Volume of a length of filament.
+
+    Parameters
+    ----------
+    mm : float
+        Filament length in mm.
+    diameter_mm : float
+        Filament diameter in mm.
+
+    Returns
+    -------
+    cm3 : float
+        ``mm * pi * (diameter_mm / 2)**2 / 1000``.
+    """
+    return mm * math.pi * (diameter_mm / 2.0) ** 2 / 1000.0
