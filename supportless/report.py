@@ -232,7 +232,7 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
         after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
         titles=("rest pose", "found pose"),
         before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
-        suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:g} deg); "
+        suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:.3g} deg); "
                  "green = support polygon, ring = centre of mass")
     written = [("before/after picture", str(before_after))]
     R = np.asarray(result.rotation, np.float64)
@@ -250,7 +250,7 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
             titles=("found pose, standing", f"as printed: turned {degrees:.0f} deg, model {direction} up"),
             before_balance=balance(result.angles, shift_posed),
             suptitle=f"{rig.name}: print orientation; support (prism) against the rest pose standing: "
-                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:g} deg)"))))
+                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:.3g} deg)"))))
     terms = {k: v for k, v in result.term_history.items() if len(v)}
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")

@@ -86,7 +86,7 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         f"- Printed: {turn_text(m)}" + ("; support counted as printed" if turned else ""),
         f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g})",
         f"- Overhang term: {_fmt(t['overhang'])} (× {settings.w_overhang:g}, faces past "
-        f"{settings.search_overhang_angle:g}°)",
+        f"{settings.search_overhang_angle:.3g}°)",
         f"- Intersection term: {_fmt(t['intersection'])} (× {settings.w_intersect:g})",
         f"- Support (prism): {_fmt(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
         f"- Support (column): {_fmt(m['support_column'])} ({_vs_rest(red.get('support_column'))})",
@@ -296,7 +296,7 @@ class Panel:
         self.fixed_info.content = (f"Fixed in the search (grey): bones {fixed_list}. Default: the bones on the "
                                    "plate and the bones joining them; the rest of the body turns about "
                                    f"them. The search counts faces past "
-                                   f"{settings.search_overhang_angle:g}° (threshold + margin) as needing "
+                                   f"{settings.search_overhang_angle:.3g}° (threshold + margin) as needing "
                                    f"support{orient}.{notes}")
 
     def search_started(self, total: int) -> None:
