@@ -170,7 +170,7 @@ def section(rows: list[dict], figures: list[str], settings, command: str) -> str
         HEADING,
         "",
         f"The default search (`SearchSettings()`: {settings.particles} particles × {settings.iterations} "
-        f"iterations, seed {settings.seed}) on every built-in 3D figure and the shared models, at commit "
+        f"iterations, seed {settings.seed}, search margin {settings.overhang_margin:g}°) on every built-in 3D figure and the shared models, at commit "
         f"{commit}. PrusaSlicer: its default print settings, 60 mm tall, support = filament with − without "
         "supports. Estimate = the prism support estimate (`support_prism`) of the report. Distortion = the "
         "normalised ARAP term of the found pose; largest joint rotation = the largest rotation of one bone "
@@ -211,11 +211,15 @@ def main(argv=None):
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--out", default=None, help="Write the table as the '## Zoo' section of this Markdown file.")
     p.add_argument("--sheet", default=str(ROOT / "docs" / "zoo.png"), help="Contact sheet PNG.")
+    p.add_argument("--overhang-margin", type=float, default=None,
+                   help="Search margin in degrees over the threshold (default: the tool's).")
     p.add_argument("--keep", default=None, help="Folder for each model's before/after and convergence pictures.")
     args = p.parse_args(argv)
     figures = zoo_figures()
     models = args.models or [*figures, *SHARED]
     settings = sl.SearchSettings().replace(particles=args.particles, iterations=args.iterations, seed=args.seed)
+    if args.overhang_margin is not None:
+        settings = settings.replace(overhang_margin=args.overhang_margin)
     command = "python benchmarks/zoo.py " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
