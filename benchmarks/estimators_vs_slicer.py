@@ -1,95 +1,229 @@
-"""How well do the support estimates track PrusaSlicer? Random poses, least squares, R².
+"""Does the slicer model predict PrusaSlicer? Collect sliced poses, fit the model, print the table.
 
-For each model, slice the rest pose and a few random poses (free bones within
-±max-angle, self-intersecting poses skipped) with PrusaSlicer at 60 mm tall and
-compare the support filament with
+Three steps, each optional:
 
-* the prism estimate (the paper's energy),
-* the column estimate,
-* the projected risky footprint (area needing support, seen from above),
+``--collect``
+    For each model: the rest pose, two random poses (every bone within ±30°,
+    none self-intersecting), a random tilt of the rest pose (15-35°), the
+    default search's result and up to three other distinct good poses of the
+    same search (the candidates ``--slice-rank 4`` slices), and the search's
+    result without the margin. All are sliced with PrusaSlicer (60 mm tall,
+    the rest pose's scale; with ``--profile FILE`` that profile, else
+    PrusaSlicer's defaults). Each sample (angles, print rotation, support
+    filament) is appended to ``--samples`` (JSON lines).
+``--fit``
+    Grid search of the effective-threshold offset ``DELTA`` and interface
+    height ``H``, non-negative least squares for the coefficients, over every
+    sample of the default profile; prints the values to put in
+    :mod:`supportless.energies.slicer_model`.
+(always) the table
+    For each model and profile: PrusaSlicer's reduction rest -> found
+    (the search's result) and the predicted one, with the error in points;
+    the slice-ranking gain (the least support among the distinct candidates
+    against the search's result); the worst error.
 
-all scaled to the same 60 mm model. It fits, over all samples, filament ≈ a·x
-and filament ≈ a·x + b·footprint for x = prism or column, and prints R² of
-each, and the footprint weight b/a as a height (mm) and as a fraction of the
-model height (how much a per-area term would add, if it helped).
-
-    python benchmarks/estimators_vs_slicer.py [--models bunny bb-bunny tpose] [--poses 8] [--seed 0]
+    python benchmarks/estimators_vs_slicer.py --collect [--models ...] [--profile FILE] [--samples FILE]
+    python benchmarks/estimators_vs_slicer.py --fit [--samples FILE]
+    python benchmarks/estimators_vs_slicer.py [--samples FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
+from scipy.optimize import nnls
 
+import models
 import supportless as sl
-from supportless.energies.overhang import projected_risky_area
-from models import available, load
+from supportless.energies import slicer_model
 from supportless.energies.exact import intersecting_face_pairs
-from supportless.slicer import find_prusa_slicer, slice_check
+from supportless.geometry import place_on_plate, print_pose
+from supportless.profile import default_profile, overhang_threshold, read_printer_profile
+from supportless.ranking import distinct_poses
+from supportless.slicer import find_prusa_slicer, scale_for_height, slice_support
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_SAMPLES = ROOT / "benchmarks" / "slicer_samples.jsonl"
+ZOO = ("tpose", "branch", "apose", "quadruped", "lying", "seated", "arm", "tree", "hand", "bird", "tentacle",
+       "dragon", "staff", "bunny", "bb-bunny")
 
 
+def _rotation(axis, degrees):
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    t = np.radians(degrees)
+    return np.eye(3) + np.sin(t) * K + (1 - np.cos(t)) * K @ K
 
 
-def samples(name, poses, max_angle, rng):
-    rig = load(name)
-    height = float(np.ptp(rig.vertices @ rig.up))
-    s = 60.0 / height
-    rows = []
-    angle_sets = [rig.rest_angles()]
-    while len(angle_sets) < poses + 1:
-        A = rng.uniform(-1, 1, (rig.bone_count, 3)) * np.radians(max_angle)
+def print_vertices(rig, angles, rotation):
+    """The pose in its print frame (as the search's results are sliced)."""
+    posed = place_on_plate(rig.pose(np.asarray(angles, float)), rig.up)
+    return print_pose(posed, np.asarray(rotation, float), rig.up)
+
+
+def collect(name, profile, profile_label, rng, out):
+    """Slice one model's poses and append the samples."""
+    rig = models.load(name)
+    angle = overhang_threshold(profile)
+    eye = np.eye(3)
+    poses = [("rest", rig.rest_angles(), eye)]
+    for _ in range(50):
+        if len(poses) == 3:
+            break
+        A = rng.uniform(-1, 1, (rig.bone_count, 3)) * np.radians(30)
         if intersecting_face_pairs(rig.pose(A), rig.faces) == 0:
-            angle_sets.append(A)
-    for A in angle_sets:
-        V = rig.pose(A)
-        rep = slice_check((rig.vertices, rig.faces), (V, rig.faces), up=rig.up, height_mm=60.0).to_dict()
-        rows.append({
-            "model": name,
-            "slicer_mm": rep["after"]["support_mm"],
-            "prism": float(sl.overhang_energy(V, rig.faces, rig.up)) * s ** 3,
-            "column": float(sl.support_volume(V, rig.faces, rig.up)) * s ** 3,
-            "footprint": float(projected_risky_area(V, rig.faces, rig.up)) * s ** 2,
+            poses.append((f"random{len(poses)}", A, eye))
+    axis = np.cross(rig.up, rng.normal(size=3))
+    poses.append(("tilt", rig.rest_angles(), _rotation(axis, rng.uniform(15, 35))))
+    t0 = time.perf_counter()
+    result = sl.optimize(rig, sl.SearchSettings(overhang_angle=angle))
+    seconds = time.perf_counter() - t0
+    for i, found in enumerate(distinct_poses(rig, result, 4)):
+        poses.append((f"found{i + 1}" if i else "found", found.angles, found.rotation))
+    bare = sl.optimize(rig, sl.SearchSettings(overhang_angle=angle, overhang_margin=0.0))
+    poses.append(("found_no_margin", bare.angles, bare.rotation))
+    scale = scale_for_height(rig.vertices, rig.up, 60.0)
+    sliced = slice_support([(print_vertices(rig, A, R), rig.faces) for _, A, R in poses], rig.up, scale,
+                           workers=2, profile=profile if profile.path else None)
+    for (label, A, R), run in zip(poses, sliced.meshes):
+        row = {"model": name, "profile": profile_label, "threshold": angle, "pose": label,
+               "angles": np.asarray(A).round(10).tolist(), "rotation": np.asarray(R).round(12).tolist(),
+               "slicer_mm": run["support_mm"], "search_s": seconds if label == "found" else None}
+        out.write(json.dumps(row) + "\n")
+        out.flush()
+    print(f"{name}: {len(poses)} poses sliced", file=sys.stderr, flush=True)
+
+
+def features(rig, rows, delta, interface_mm):
+    """(len(rows), 3) features of the sampled poses at 60 mm."""
+    scale = scale_for_height(rig.vertices, rig.up, 60.0)
+    V = np.stack([print_vertices(rig, r["angles"], r["rotation"]) for r in rows])
+    return slicer_model.support_features(V, rig.faces, rig.up, rows[0]["threshold"], scale, delta, interface_mm)
+
+
+class Samples:
+    """The samples by model, the rigs and a cache of features per (delta, H)."""
+
+    def __init__(self, rows):
+        self.rows = rows
+        self.rigs = {m: models.load(m) for m in dict.fromkeys(r["model"] for r in rows)}
+        self._cache = {}
+
+    def X(self, rows, delta, interface_mm):
+        out = []
+        for r in rows:
+            key = (r["model"], r["profile"], r["pose"], delta, interface_mm)
+            if key not in self._cache:
+                self._cache[key] = features(self.rigs[r["model"]], [r], delta, interface_mm)[0]
+            out.append(self._cache[key])
+        return np.array(out)
+
+
+def reduction_errors(rows, predicted):
+    """Per (model, profile): PrusaSlicer's and the predicted reduction rest -> found, and the ranking gain."""
+    y = np.array([r["slicer_mm"] for r in rows])
+    table = []
+    for key in dict.fromkeys((r["model"], r["profile"]) for r in rows):
+        idx = {r["pose"]: i for i, r in enumerate(rows) if (r["model"], r["profile"]) == key}
+        if "rest" not in idx or "found" not in idx:
+            continue
+        b, f = idx["rest"], idx["found"]
+        found = [i for p, i in idx.items() if p.startswith("found") and p != "found_no_margin"]
+        best = min(found, key=lambda i: y[i])
+        table.append({
+            "model": key[0], "profile": key[1], "before": y[b], "after": y[f],
+            "slicer": 100 * (1 - y[f] / y[b]) if y[b] > 0 else None,
+            "predicted": 100 * (1 - predicted[f] / predicted[b]) if predicted[b] > 0 else None,
+            "predicted_before": predicted[b], "predicted_after": predicted[f],
+            "ranked": y[best], "ranked_of": len(found),
+            "search_s": rows[f].get("search_s"),
         })
-        print(json.dumps(rows[-1]), file=sys.stderr, flush=True)
-    return rows
+    for t in table:
+        t["error"] = None if t["slicer"] is None or t["predicted"] is None else t["predicted"] - t["slicer"]
+    return table
 
 
-def r2(X, y):
-    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
-    res = y - X @ coef
-    return 1.0 - res @ res / ((y - y.mean()) @ (y - y.mean())), coef
+def fit(samples):
+    """Grid over DELTA and H, NNLS coefficients; the best by the worst reduction error at the found poses."""
+    rows = [r for r in samples.rows if r["profile"] == "default"]
+    y = np.array([r["slicer_mm"] for r in rows])
+    best = None
+    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0), (1.0, 2.0, 3.0)):
+        X = samples.X(rows, delta, H)
+        coef, _ = nnls(X, y)
+        errors = [abs(t["error"]) for t in reduction_errors(rows, X @ coef) if t["error"] is not None]
+        res = y - X @ coef
+        r2 = 1 - res @ res / ((y - y.mean()) @ (y - y.mean()))
+        score = (max(errors), float(np.sqrt(np.mean(np.square(errors)))))
+        print(f"DELTA {delta:4.1f}  H {H:3.1f}  worst {score[0]:5.1f}  rms {score[1]:5.1f}  R2 {r2:.3f}  "
+              f"coefficients {np.round(coef, 4).tolist()}", file=sys.stderr)
+        if best is None or score < best[0]:
+            best = (score, delta, H, coef, r2)
+    (worst, rms), delta, H, coef, r2 = best
+    print(f"best: DELTA = {delta:g}, INTERFACE_MM = {H:g}, COEFFICIENTS = {tuple(np.round(coef, 4).tolist())} "
+          f"(worst reduction error {worst:.1f} points, rms {rms:.1f}, R2 of the filament {r2:.3f}, "
+          f"{len(rows)} sliced poses)")
+    return delta, H, coef
+
+
+def _pct(x):
+    return "–" if x is None else f"{x:.1f} %"
+
+
+def print_table(samples):
+    """The table of predicted against PrusaSlicer reductions with the current model."""
+    rows = samples.rows
+    predicted = samples.X(rows, slicer_model.DELTA, slicer_model.INTERFACE_MM) @ np.asarray(slicer_model.COEFFICIENTS)
+    table = reduction_errors(rows, predicted)
+    print("| model | profile | PrusaSlicer support mm rest → found | reduction PrusaSlicer | predicted "
+          "| error (points) | `--slice-rank 4`: support mm (of n poses) |")
+    print("|---|---|---|---|---|---|---|")
+    for t in table:
+        gain = 100 * (1 - t["ranked"] / t["after"]) if t["after"] > 0 else 0.0
+        error = "–" if t["error"] is None else f"{t['error']:+.1f}"
+        print(f"| {t['model']} | {t['profile']} | {t['before']:.0f} → {t['after']:.0f} | {_pct(t['slicer'])} "
+              f"| {_pct(t['predicted'])} | {error} "
+              f"| {t['ranked']:.0f} ({t['ranked_of']}; {gain:.1f} % less) |")
+    errors = [(abs(t["error"]), t["model"], t["profile"]) for t in table if t["error"] is not None]
+    worst = max(errors)
+    print(f"\nWorst |predicted − PrusaSlicer|: {worst[0]:.1f} points ({worst[1]}, {worst[2]}); "
+          f"mean {np.mean([e[0] for e in errors]):.1f} points over {len(errors)} rows.")
+    gains = [(t["after"] - t["ranked"], t["model"], t["profile"]) for t in table]
+    better = [g for g in gains if g[0] > 0.5]
+    print(f"Slice-ranking (4 poses) needed less support than the search's result on {len(better)} of {len(gains)} "
+          f"rows" + (f", by up to {max(better)[0]:.0f} mm ({max(better)[1]})." if better else "."))
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--models", nargs="+", default=["bunny", "bb-bunny", "tpose"])
-    p.add_argument("--poses", type=int, default=8)
-    p.add_argument("--max-angle", type=float, default=30.0)
+    p.add_argument("--collect", action="store_true", help="Slice poses of the models and append the samples.")
+    p.add_argument("--fit", action="store_true", help="Refit the slicer model on the default-profile samples.")
+    p.add_argument("--models", nargs="+", default=list(ZOO))
+    p.add_argument("--profile", default=None, help="PrusaSlicer config (.ini) to collect with (default: its defaults).")
+    p.add_argument("--samples", default=str(DEFAULT_SAMPLES))
     p.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
-    if find_prusa_slicer() is None:
-        sys.exit("PrusaSlicer not found: apt-get install prusa-slicer")
-    rng = np.random.default_rng(args.seed)
-    rows = []
-    for m in args.models:
-        if available(m):
-            rows += samples(m, args.poses, args.max_angle, rng)
-    y = np.array([r["slicer_mm"] for r in rows])
-    print(f"{len(rows)} poses of {', '.join(args.models)}; PrusaSlicer support filament vs estimates (60 mm tall)")
-    print("| estimate | R² (filament ≈ a·x) | R² (filament ≈ a·x + b·footprint) | b/a (mm of height) |")
-    print("|---|---|---|---|")
-    for key in ("prism", "column"):
-        x = np.array([r[key] for r in rows])
-        f = np.array([r["footprint"] for r in rows])
-        r_a, _ = r2(x[:, None], y)
-        r_b, coef = r2(np.column_stack([x, f]), y)
-        print(f"| {key} | {r_a:.3f} | {r_b:.3f} | {coef[1] / coef[0]:.2f} mm ({coef[1] / coef[0] / 60:.3f} of height) |")
-    f = np.array([r["footprint"] for r in rows])
-    r_f, _ = r2(f[:, None], y)
-    print(f"| footprint alone | {r_f:.3f} | | |")
+    if args.collect:
+        if find_prusa_slicer() is None:
+            sys.exit("PrusaSlicer not found: apt-get install prusa-slicer")
+        profile = read_printer_profile(args.profile) if args.profile else default_profile()
+        label = Path(args.profile).stem if args.profile else "default"
+        rng = np.random.default_rng(args.seed)
+        with open(args.samples, "a") as out:
+            for name in args.models:
+                if models.available(name):
+                    collect(name, profile, label, rng, out)
+    rows = [json.loads(line) for line in open(args.samples)]
+    samples = Samples(rows)
+    if args.fit:
+        fit(samples)
+    print_table(samples)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,7 @@ from .rig import Rig
 from .search import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, pose_distance_deg
 from .slicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
-__all__ = ["RankedResult", "slice_rank", "candidate_result"]
+__all__ = ["RankedResult", "candidate_result", "distinct_poses", "slice_rank"]
 
 
 @dataclass
@@ -90,6 +90,42 @@ def candidate_result(rig: Rig, result: PoseResult, angles: np.ndarray, rotation:
                                print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
 
 
+def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float = DISTINCT_DEGREES,
+                   tolerance: float = CANDIDATE_TOLERANCE) -> list[PoseResult]:
+    """The poses :func:`slice_rank` slices: the search's result, then distinct good alternatives.
+
+    Parameters
+    ----------
+    rig : Rig
+    result : PoseResult
+        The search's result, with its :attr:`~PoseResult.candidates`.
+    count : int
+        How many poses at most (at least 1).
+    min_degrees, tolerance
+        As :func:`supportless.search.distinct_candidates`.
+
+    Returns
+    -------
+    poses : list of PoseResult
+        ``result`` itself first; the others none self-intersecting.
+    """
+    if count < 1:
+        raise ValueError("count must be at least 1")
+    cand = result.candidates or {}
+    if not len(cand.get("values", ())):  # a result without alternatives: itself only
+        cand = {"angles": result.angles[None], "rotations": result.rotation[None], "values": np.array([result.value])}
+    elif not (np.allclose(cand["angles"][0], result.angles) and np.allclose(cand["rotations"][0], result.rotation)):
+        cand = {"angles": np.concatenate([result.angles[None], cand["angles"]]),
+                "rotations": np.concatenate([result.rotation[None], cand["rotations"]]),
+                "values": np.concatenate([[result.value], cand["values"]])}
+
+    def no_intersection(angles, _rotation):
+        return rig.dim != 3 or not self_intersects(rig.pose(angles), rig.faces)
+
+    picked = distinct_candidates(cand, count, min_degrees, tolerance, accept=no_intersection)
+    return [result] + [candidate_result(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
+
+
 def slice_rank(rig: Rig, result: PoseResult, count: int, *, height_mm: float = 60.0,
                profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
                slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S,
@@ -125,21 +161,7 @@ def slice_rank(rig: Rig, result: PoseResult, count: int, *, height_mm: float = 6
     SlicerNotFound, SlicerError
         As :func:`supportless.slicer.slice_support`.
     """
-    if count < 1:
-        raise ValueError("count must be at least 1")
-    cand = result.candidates or {}
-    if not len(cand.get("values", ())):  # a result without alternatives: itself only
-        cand = {"angles": result.angles[None], "rotations": result.rotation[None], "values": np.array([result.value])}
-    elif not (np.allclose(cand["angles"][0], result.angles) and np.allclose(cand["rotations"][0], result.rotation)):
-        cand = {"angles": np.concatenate([result.angles[None], cand["angles"]]),
-                "rotations": np.concatenate([result.rotation[None], cand["rotations"]]),
-                "values": np.concatenate([[result.value], cand["values"]])}
-
-    def no_intersection(angles, _rotation):
-        return rig.dim != 3 or not self_intersects(rig.pose(angles), rig.faces)
-
-    picked = distinct_candidates(cand, count, min_degrees, tolerance, accept=no_intersection)
-    poses = [result] + [candidate_result(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
+    poses = distinct_poses(rig, result, count, min_degrees, tolerance)
     t0 = time.perf_counter()
     scale = scale_for_height(rig.vertices, rig.up, height_mm)
     sliced = (slice_fn or slice_support)([(p.print_vertices, rig.faces) for p in poses], rig.up, scale, timeout,
