@@ -232,6 +232,12 @@ def _summary_table(report: dict):
     table = Table(title=f"{report['model']}: rest pose vs found pose")
     for col in ("measure", "before", "after", "change"):
         table.add_column(col, justify="right" if col != "measure" else "left")
+    predicted = report.get("predicted_slicer")
+    if predicted:
+        fraction = predicted["reduction"]
+        table.add_row(f"support filament, PrusaSlicer predicted ({predicted['height_mm']:g} mm tall)",
+                      f"{predicted['before_mm']:.0f} mm", f"{predicted['after_mm']:.0f} mm",
+                      pct(None if fraction is None else 100 * fraction))
     table.add_row("support, prism estimate", f"{b['support_prism']:.4g}", f"{a['support_prism']:.4g}",
                   pct(red["support_prism"]))
     table.add_row("support, column estimate", f"{b['support_column']:.4g}", f"{a['support_column']:.4g}",

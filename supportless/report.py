@@ -18,12 +18,13 @@ import numpy as np
 from .energies.exact import intersecting_face_pairs
 from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
+from .energies.slicer_model import predicted_support_mm
 from .energies.support import support_volume
 from .geometry import place_on_plate, print_transform
 from .orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
-__all__ = ["build_report", "pose_measures", "reduction", "write_pictures"]
+__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "pose_measures", "predicted_slicer", "reduction", "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -106,6 +107,41 @@ def reduction(before: float, after: float) -> float | None:
     return None if before <= 0 else 100.0 * (1.0 - after / before)
 
 
+#: The printed height the report's predicted slicer filament is for (as ``slice-check``'s default), mm.
+PREDICTION_HEIGHT_MM = 60.0
+
+
+def predicted_slicer(rig, result, height_mm: float = PREDICTION_HEIGHT_MM) -> dict | None:
+    """PrusaSlicer's support filament for the rest pose and the found pose, as the slicer model predicts it.
+
+    Parameters
+    ----------
+    rig : Rig
+    result : supportless.search.PoseResult
+    height_mm : float
+        The rest pose is printed this tall; the found pose at the same scale.
+
+    Returns
+    -------
+    prediction : dict or None
+        ``height_mm``, ``threshold_deg``, ``before_mm``, ``after_mm`` (support
+        filament, mm of 1.75 mm filament) and ``reduction`` (a fraction,
+        rest -> found; None when the rest pose needs none); None for planar rigs.
+    """
+    if rig.dim != 3:
+        return None
+    up = np.asarray(rig.up, np.float64)
+    extent = float(np.ptp(rig.vertices @ up))
+    if not extent > 0:
+        return None
+    scale = float(height_mm) / extent
+    angle = float(result.settings.overhang_angle)
+    before, after = predicted_support_mm(np.stack([place_on_plate(rig.vertices, up), result.print_vertices]),
+                                         rig.faces, up, angle, scale)
+    return {"height_mm": float(height_mm), "threshold_deg": angle, "before_mm": float(before),
+            "after_mm": float(after), "reduction": None if before <= 0 else float(1.0 - after / before)}
+
+
 def build_report(rig, result) -> dict:
     """The JSON report of a pose search: the rest pose and the found pose side by side.
 
@@ -119,7 +155,9 @@ def build_report(rig, result) -> dict:
     report : dict
         Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
         printer's threshold ``result.settings.overhang_angle``), their
-        ``reduction_percent``, the ``print_rotation`` and which ``frames``
+        ``reduction_percent``, ``predicted_slicer`` (:func:`predicted_slicer`:
+        the support filament PrusaSlicer is predicted to lay down, 60 mm
+        tall) and its ``predicted_slicer_reduction`` (a fraction), the ``print_rotation`` and which ``frames``
         the figures are in, the largest and RMS vertex displacement, each
         bone's rotation (one angle, degrees) and the largest, the Euler
         angles, runtime, settings and convergence history.
@@ -136,6 +174,7 @@ def build_report(rig, result) -> dict:
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
     turned = np.degrees(objective.prior.angles(result.angles))
+    predicted = predicted_slicer(rig, result)
     return {
         "model": rig.name,
         "vertices": int(len(rig.vertices)),
@@ -150,6 +189,8 @@ def build_report(rig, result) -> dict:
             "support_column": reduction(before["support_column"], after["support_column"]),
             "risky_area": reduction(before["risky_area"], after["risky_area"]),
         },
+        "predicted_slicer": predicted,
+        "predicted_slicer_reduction": None if predicted is None else predicted["reduction"],
         "print_rotation": {
             "orient": result.settings.orient,
             "matrix": R.round(12).tolist(),

@@ -121,3 +121,19 @@ def test_pose_measures_in_the_print_frame(branch_rig):
     assert m["objective"] == pytest.approx(float(obj(angles, R)), rel=1e-12)
     for key in ("arap", "new_contact_vertices", "stability_margin", "self_intersection_volume"):
         assert m[key] == standing[key]
+
+
+def test_report_predicts_the_slicers_support_at_60_mm(branch_rig, searched):
+    from supportless.energies.slicer_model import predicted_support_mm
+
+    rep = build_report(branch_rig, searched)
+    p = rep["predicted_slicer"]
+    assert p["height_mm"] == 60.0 and p["threshold_deg"] == searched.settings.overhang_angle
+    # the rest pose scaled to 60 mm tall, the found pose by the same factor, each in its print frame
+    scale = 60.0 / np.ptp(branch_rig.vertices @ branch_rig.up)
+    rest = predicted_support_mm(branch_rig.vertices, branch_rig.faces, branch_rig.up, p["threshold_deg"], scale)
+    found = predicted_support_mm(searched.print_vertices, branch_rig.faces, branch_rig.up, p["threshold_deg"], scale)
+    assert p["before_mm"] == pytest.approx(rest) and p["after_mm"] == pytest.approx(found)
+    assert p["before_mm"] > p["after_mm"] > 0  # the cantilever's support falls
+    assert rep["predicted_slicer_reduction"] == pytest.approx(1 - found / rest)
+    json.dumps(rep)
