@@ -91,6 +91,7 @@ def test_cli_search_threshold_follows_the_profile(tmp_path):
         assert rep["settings"]["overhang_angle"] == threshold + 1
         assert rep["settings"]["search_overhang_angle"] == pytest.approx(threshold + 1 + margin)
         assert rep["printer_profile"]["profile"].endswith(f"p{threshold}.ini")
+        assert rep["predicted_slicer"]["threshold_deg"] == threshold + 1  # the prediction follows it too
     # an explicit --overhang-angle wins over the profile
     out = CliRunner().invoke(main, ["optimize", "demo:branch", "-o", str(tmp_path / "x.stl"), "--particles", "6",
                                     "--iterations", "1", "--printer-profile", str(ini), "--overhang-angle", "40",
