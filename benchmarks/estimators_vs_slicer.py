@@ -13,8 +13,9 @@ Three steps, each optional:
     filament) is appended to ``--samples`` (JSON lines).
 ``--fit``
     Grid search of the effective-threshold offset ``DELTA`` and interface
-    height ``H``, non-negative least squares for the coefficients, over every
-    sample of the default profile; prints the values to put in
+    height ``H``, non-negative least squares of the relative error for the
+    coefficients, over every sample of the default profile, scored by the
+    worst reduction error at the found poses; prints the values to put in
     :mod:`supportless.energies.slicer_model`.
 (always) the table
     For each model and profile: PrusaSlicer's reduction rest -> found
@@ -154,9 +155,10 @@ def fit(samples):
     rows = [r for r in samples.rows if r["profile"] == "default"]
     y = np.array([r["slicer_mm"] for r in rows])
     best = None
-    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0), (1.0, 2.0, 3.0)):
+    weight = 1.0 / np.maximum(y, 50.0)  # relative errors: every model counts, not only the biggest supports
+    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0), (1.0, 2.0, 3.0)):
         X = samples.X(rows, delta, H)
-        coef, _ = nnls(X, y)
+        coef, _ = nnls(X * weight[:, None], y * weight)
         errors = [abs(t["error"]) for t in reduction_errors(rows, X @ coef) if t["error"] is not None]
         res = y - X @ coef
         r2 = 1 - res @ res / ((y - y.mean()) @ (y - y.mean()))
