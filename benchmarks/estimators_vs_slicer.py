@@ -156,7 +156,7 @@ def fit(samples):
     y = np.array([r["slicer_mm"] for r in rows])
     best = None
     weight = 1.0 / np.maximum(y, 50.0)  # relative errors: every model counts, not only the biggest supports
-    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0), (1.0, 2.0, 3.0)):
+    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0, 17.0, 20.0, 25.0), (1.0, 2.0, 3.0)):
         X = samples.X(rows, delta, H)
         coef, _ = nnls(X * weight[:, None], y * weight)
         errors = [abs(t["error"]) for t in reduction_errors(rows, X @ coef) if t["error"] is not None]
@@ -178,10 +178,11 @@ def _pct(x):
     return "–" if x is None else f"{x:.1f} %"
 
 
-def print_table(samples):
-    """The table of predicted against PrusaSlicer reductions with the current model."""
+def print_table(samples, model=None):
+    """The table of predicted against PrusaSlicer reductions with ``model`` (delta, H, coefficients; default: the code's)."""
     rows = samples.rows
-    predicted = samples.X(rows, slicer_model.DELTA, slicer_model.INTERFACE_MM) @ np.asarray(slicer_model.COEFFICIENTS)
+    delta, H, coef = model or (slicer_model.DELTA, slicer_model.INTERFACE_MM, slicer_model.COEFFICIENTS)
+    predicted = samples.X(rows, delta, H) @ np.asarray(coef)
     table = reduction_errors(rows, predicted)
     print("| model | profile | PrusaSlicer support mm rest → found | reduction PrusaSlicer | predicted "
           "| error (points) | `--slice-rank 4`: support mm (of n poses) |")
@@ -223,9 +224,7 @@ def main(argv=None):
                     collect(name, profile, label, rng, out)
     rows = [json.loads(line) for line in open(args.samples)]
     samples = Samples(rows)
-    if args.fit:
-        fit(samples)
-    print_table(samples)
+    print_table(samples, fit(samples) if args.fit else None)
 
 
 if __name__ == "__main__":

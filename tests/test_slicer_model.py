@@ -45,7 +45,7 @@ def test_steep_faces_are_not_supported_and_a_hanging_tip_is():
 def _ramp(alpha_deg):
     """A triangular prism whose underside rises from the plate at ``alpha_deg`` from it (up +z)."""
     a = np.radians(alpha_deg)
-    tri = [(0.0, 0.0), (5 * np.cos(a), 5 * np.sin(a)), (0.0, 10.0)]  # (x, z): ramp, top, wall
+    tri = [(0.0, 0.0), (10 * np.cos(a), 10 * np.sin(a)), (0.0, 20.0)]  # (x, z): ramp, top, wall
     P = np.array([(x, y, z) for y in (0.0, 1.0) for x, z in tri])
     hull = trimesh.convex.convex_hull(P)
     return np.asarray(hull.vertices, float), np.asarray(hull.faces, np.int64)
@@ -56,11 +56,11 @@ def test_the_threshold_is_the_profiles_plus_delta():
     assert 45.0 + DELTA < 58.0 < 53.13 + DELTA
     V, F = _ramp(58.0)
     a = np.radians(58.0)
-    # area of the ramp 5 x 1, projected 5 cos(a); its height rises 0 .. 5 sin(a) = 4.24 mm over the face
+    # area of the ramp 10 x 1, projected 10 cos(a); its height rises 0 .. 10 sin(a) = 8.5 mm over the face
     interface, base, _ = support_features(V, F, "z", 53.13)
     assert interface > 0 and base > 0
-    h = 5 * np.sin(a) * np.array([1, 2]) / 3  # the two triangles' centroid heights
-    proj = 5 * np.cos(a) / 2
+    h = 10 * np.sin(a) * np.array([1, 2]) / 3  # the two triangles' centroid heights
+    proj = 10 * np.cos(a) / 2
     assert base == pytest.approx(sum(proj * max(x - INTERFACE_MM, 0) for x in h))
     assert np.all(support_features(V, F, "z", 45.0)[:2] == 0)
 
