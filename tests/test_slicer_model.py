@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from supportless.energies.slicer_model import (COEFFICIENTS, DELTA, INTERFACE_MM, TIP_MIN_MM, predicted_support_mm,
+from supportless.energies.slicer_model import (COEFFICIENTS, DELTA, INTERFACE_MM, predicted_support_mm,
                                                support_features)
 
 
@@ -82,4 +82,3 @@ def test_batched_equals_single_and_rigid_moves_in_the_plate_cost_nothing():
     single = predicted_support_mm(V, F, "z", 53.13, scale=2.0)
     assert batch[0] == pytest.approx(single) and batch[1] == pytest.approx(single, rel=1e-12)
     assert single == pytest.approx(np.dot(COEFFICIENTS, support_features(V, F, "z", 53.13, scale=2.0)))
-    assert TIP_MIN_MM > 0
