@@ -13,10 +13,10 @@ Three steps, each optional:
     filament) is appended to ``--samples`` (JSON lines).
 ``--fit``
     Grid search of the effective-threshold offset ``DELTA`` and interface
-    height ``H``, non-negative least squares of the relative error for the
-    coefficients, over every sample of the default profile, scored by the
-    worst reduction error at the found poses; prints the values to put in
-    :mod:`supportless.energies.slicer_model`.
+    height ``H``; for each, the coefficients that make the worst reduction
+    error (rest -> found, every model and profile) smallest; prints the
+    values to put in :mod:`supportless.energies.slicer_model` and each
+    model's error when it is left out of the fit.
 (always) the table
     For each model and profile: PrusaSlicer's reduction rest -> found
     (the search's result) and the predicted one, with the error in points;
@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import nnls
+from scipy.optimize import minimize, nnls
 
 import models
 import supportless as sl
@@ -150,27 +150,80 @@ def reduction_errors(rows, predicted):
     return table
 
 
-def fit(samples):
-    """Grid over DELTA and H, NNLS coefficients; the best by the worst reduction error at the found poses."""
-    rows = [r for r in samples.rows if r["profile"] == "default"]
+def _pairs(rows):
+    """Row indices of (rest, found) per (model, profile), and PrusaSlicer's reductions there (points)."""
+    table = reduction_errors(rows, np.ones(len(rows)))
+    index = {(r["model"], r["profile"], r["pose"]): i for i, r in enumerate(rows)}
+    kept = [t for t in table if t["slicer"] is not None]
+    rest = np.array([index[(t["model"], t["profile"], "rest")] for t in kept], int)
+    found = np.array([index[(t["model"], t["profile"], "found")] for t in kept], int)
+    return rest, found, np.array([t["slicer"] for t in kept])
+
+
+def _worst_error(coef, rest, found, slicer, X):
+    """The worst |predicted - PrusaSlicer| reduction (points) with the coefficients ``|coef|``."""
+    p = X @ np.abs(coef)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        predicted = np.where(p[rest] > 0, 100 * (1 - p[found] / p[rest]), np.nan)
+    err = np.abs(predicted - slicer)
+    return float(np.nanmax(err)) if np.isfinite(err).any() else 0.0
+
+
+def fit_coefficients(rows, X):
+    """Coefficients that make the worst reduction error over ``rows`` smallest.
+
+    A reduction does not change when every coefficient is scaled, so the
+    direction ``(1, b, r)`` is chosen on a log grid of ``b`` and ``r`` and
+    refined by Nelder-Mead on the worst error; the length then by least
+    squares of the relative filament error.
+    """
     y = np.array([r["slicer_mm"] for r in rows])
-    best = None
     weight = 1.0 / np.maximum(y, 50.0)  # relative errors: every model counts, not only the biggest supports
-    for delta, H in itertools.product((3.0, 5.0, 7.0, 9.0, 11.0, 13.0, 15.0, 17.0, 20.0, 25.0), (1.0, 2.0, 3.0)):
+    pairs = _pairs(rows)
+    grid = [(1.0, b, r) for b in np.geomspace(0.005, 1.0, 40) for r in np.r_[0.0, np.geomspace(0.01, 10.0, 50)]]
+    scores = np.array([_worst_error(np.array(c), *pairs, X) for c in grid])
+    best = None
+    for k in np.argsort(scores)[:3]:
+        m = minimize(_worst_error, np.array(grid[k]), args=(*pairs, X), method="Nelder-Mead",
+                     options={"xatol": 1e-5, "fatol": 1e-4, "maxiter": 4000})
+        if best is None or m.fun < best.fun:
+            best = m
+    coef = np.abs(best.x)
+    p = X @ coef * weight
+    return coef * (p @ (y * weight)) / (p @ p)
+
+
+def fit(samples):
+    """Grid over DELTA and H, minimax coefficients; the best by the worst reduction error over every profile.
+
+    Also prints, for the chosen DELTA and H, the leave-one-model-out error:
+    each model's error when the coefficients are fitted without it.
+    """
+    rows = samples.rows
+    best = None
+    for delta, H in itertools.product((1.0, 2.0, 3.0, 4.0, 5.0, 7.0, 9.0), (2.0, 3.0, 4.0, 5.0, 6.0, 8.0)):
         X = samples.X(rows, delta, H)
-        coef, _ = nnls(X * weight[:, None], y * weight)
+        coef = fit_coefficients(rows, X)
         errors = [abs(t["error"]) for t in reduction_errors(rows, X @ coef) if t["error"] is not None]
-        res = y - X @ coef
-        r2 = 1 - res @ res / ((y - y.mean()) @ (y - y.mean()))
-        score = (max(errors), float(np.sqrt(np.mean(np.square(errors)))))
-        print(f"DELTA {delta:4.1f}  H {H:3.1f}  worst {score[0]:5.1f}  rms {score[1]:5.1f}  R2 {r2:.3f}  "
+        score = (max(errors), float(np.mean(errors)))
+        print(f"DELTA {delta:4.1f}  H {H:3.1f}  worst {score[0]:5.1f}  mean {score[1]:5.1f}  "
               f"coefficients {np.round(coef, 4).tolist()}", file=sys.stderr)
         if best is None or score < best[0]:
-            best = (score, delta, H, coef, r2)
-    (worst, rms), delta, H, coef, r2 = best
+            best = (score, delta, H, coef)
+    (worst, mean), delta, H, coef = best
+    X = samples.X(rows, delta, H)
+    held_out = []
+    for name in dict.fromkeys(r["model"] for r in rows):
+        keep = [i for i, r in enumerate(rows) if r["model"] != name]
+        out = [i for i, r in enumerate(rows) if r["model"] == name]
+        c = fit_coefficients([rows[i] for i in keep], X[keep])
+        for t in reduction_errors([rows[i] for i in out], X[out] @ c):
+            if t["error"] is not None:
+                held_out.append((abs(t["error"]), f"{t['model']}/{t['profile']}"))
     print(f"best: DELTA = {delta:g}, INTERFACE_MM = {H:g}, COEFFICIENTS = {tuple(np.round(coef, 4).tolist())} "
-          f"(worst reduction error {worst:.1f} points, rms {rms:.1f}, R2 of the filament {r2:.3f}, "
-          f"{len(rows)} sliced poses)")
+          f"(worst reduction error {worst:.1f} points, mean {mean:.1f}, {len(rows)} sliced poses); "
+          f"left out of the fit, each model's error: worst {max(held_out)[0]:.1f} points ({max(held_out)[1]}), "
+          f"mean {np.mean([e for e, _ in held_out]):.1f}")
     return delta, H, coef
 
 
@@ -206,7 +259,7 @@ def print_table(samples, model=None):
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--collect", action="store_true", help="Slice poses of the models and append the samples.")
-    p.add_argument("--fit", action="store_true", help="Refit the slicer model on the default-profile samples.")
+    p.add_argument("--fit", action="store_true", help="Refit the slicer model on the samples.")
     p.add_argument("--models", nargs="+", default=list(ZOO))
     p.add_argument("--profile", default=None, help="PrusaSlicer config (.ini) to collect with (default: its defaults).")
     p.add_argument("--samples", default=str(DEFAULT_SAMPLES))

@@ -145,8 +145,10 @@ def _search_options(f):
                      help="Weight of the support term."),
         click.option("--w-intersect", type=float, default=d.w_intersect, show_default=True,
                      help="Weight of the self-intersection term."),
-        click.option("--overhang-model", type=click.Choice(["prism", "column"]), default=d.overhang_model,
-                     show_default=True, help="Support estimate the search minimises."),
+        click.option("--overhang-model", type=click.Choice(["prism", "column", "slicer"]), default=d.overhang_model,
+                     show_default=True,
+                     help="Support estimate the search minimises: the paper's prisms, columns to the body "
+                          "below, or the slicer model fitted to PrusaSlicer (3D)."),
         click.option("--w-prior", type=float, default=d.w_prior, show_default=True,
                      help="Weight of the natural-pose prior (turning much of the body costs more)."),
         click.option("--joint-limit", type=click.FloatRange(0, 180), default=d.joint_limit,

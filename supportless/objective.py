@@ -31,6 +31,7 @@ import numpy as np
 from .energies import arap as arap_mod
 from .energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
 from .energies.overhang import overhang_energy
+from .energies.slicer_model import predicted_support_mm
 from .energies.support import support_volume
 from .kinematics import skin
 from .geometry import signed_volume
@@ -50,7 +51,10 @@ W_PRIOR = 0.3
 #: larger than any pose that keeps them can cost.
 INFEASIBLE = 1e3
 
-OVERHANG_MODELS = ("prism", "column")
+OVERHANG_MODELS = ("prism", "column", "slicer")
+
+#: Printed height (mm) at which the ``slicer`` overhang model measures a pose (as the report does).
+SLICER_MODEL_HEIGHT_MM = 60.0
 
 
 class Objective:
@@ -64,10 +68,12 @@ class Objective:
     overhang_angle : float
         Threshold slope in degrees from the build plate (45 = the usual slicer
         default).
-    overhang_model : {"prism", "column"}
+    overhang_model : {"prism", "column", "slicer"}
         ``prism``: the paper's per-face prism estimate. ``column``: support
         columns cast down to the plate or the body below
-        (:func:`supportless.energies.support.support_volume`).
+        (:func:`supportless.energies.support.support_volume`). ``slicer``:
+        PrusaSlicer's support filament as the fitted slicer model predicts it
+        at 60 mm tall (:mod:`supportless.energies.slicer_model`; 3D only).
     clusters : int or None
         Rotation clusters of the reduced ARAP energy (None = one per element).
     resolution : int
@@ -158,6 +164,9 @@ class Objective:
         """
         if rotations is not None:
             vertices = np.matmul(vertices, np.swapaxes(rotations, -1, -2))
+        if self.overhang_model == "slicer":
+            return predicted_support_mm(vertices, self.rig.faces, self.rig.up, self.overhang_angle,
+                                        SLICER_MODEL_HEIGHT_MM / self.height)
         if self.overhang_model == "column":
             return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
                                   backend=self.backend)

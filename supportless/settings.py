@@ -88,8 +88,8 @@ class SearchSettings:
     overhang_margin : float
         The search counts faces up to ``overhang_angle + overhang_margin`` as
         needing support (see :data:`OVERHANG_MARGIN`).
-    overhang_model : {"prism", "column"}
-        Support estimate the search minimises.
+    overhang_model : {"prism", "column", "slicer"}
+        Support estimate the search minimises (:class:`supportless.objective.Objective`).
     w_arap, w_overhang, w_intersect : float
         Weights of the normalised terms.
     fix, free : tuple of str
@@ -204,7 +204,12 @@ class SearchSettings:
 
     @property
     def search_overhang_angle(self) -> float:
-        """The threshold the search minimises: ``min(overhang_angle + overhang_margin, 89)`` degrees."""
+        """The threshold the search minimises: ``min(overhang_angle + overhang_margin, 89)`` degrees.
+
+        The ``slicer`` overhang model takes the printer's threshold itself (it carries its own fitted offset).
+        """
+        if self.overhang_model == "slicer":
+            return self.overhang_angle
         return min(self.overhang_angle + self.overhang_margin, MAX_SEARCH_ANGLE)
 
     def replace(self, **changes) -> SearchSettings:

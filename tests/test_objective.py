@@ -120,6 +120,34 @@ def test_rigid_motion_of_the_whole_model_costs_no_distortion(rig):
     assert float(obj.terms(A)["arap"][0]) < 1e-9
 
 
+def test_the_slicer_model_is_the_predicted_filament_at_60_mm_and_takes_the_printers_threshold(rig):
+    from supportless.energies.slicer_model import predicted_support_mm
+
+    A = random_angles(rig, 4, seed=3)
+    settings = sl.SearchSettings(overhang_angle=53.13, overhang_model="slicer")
+    assert settings.search_overhang_angle == 53.13  # no margin: the model carries its own fitted offset
+    obj = settings.objective(rig)
+    scale = 60.0 / np.ptp(rig.vertices @ rig.up)
+    V = rig.pose(A)
+    expected = predicted_support_mm(V, rig.faces, rig.up, 53.13, scale)
+    np.testing.assert_allclose(obj.overhang(V), expected, rtol=1e-12)
+    np.testing.assert_allclose([float(obj.overhang(v)) for v in V], expected, rtol=1e-12)  # batch = singles
+    assert float(obj.terms(rig.rest_angles())["overhang"]) == pytest.approx(1.0)
+    # the prism model keeps the margin
+    assert sl.SearchSettings(overhang_angle=53.13).search_overhang_angle > 53.13
+
+
+def test_the_slicer_model_measures_poses_in_chunks_equal_to_one_batch(monkeypatch):
+    from supportless.energies import slicer_model
+
+    V = np.random.default_rng(0).normal(size=(5, 4, 3))
+    F = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]])
+    whole = slicer_model.predicted_support_mm(V, F, "z", 53.13)
+    monkeypatch.setattr(slicer_model, "_CHUNK_ELEMENTS", 8)  # two poses of four faces at a time
+    np.testing.assert_allclose(slicer_model.predicted_support_mm(V, F, "z", 53.13), whole, rtol=1e-12)
+    assert whole.shape == (5,) and np.all(whole >= 0)
+
+
 def test_unknown_overhang_model_is_refused(rig):
     with pytest.raises(ValueError):
         sl.Objective(rig, overhang_model="cone")

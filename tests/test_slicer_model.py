@@ -19,16 +19,29 @@ def _shelf(height, width=10.0):
 
 
 @pytest.mark.parametrize("height", [0.5, 1.0, 2.0, 7.5])
-def test_a_flat_overhang_is_interface_then_base(height):
+def test_a_flat_overhang_is_interface_then_base_with_its_outline(height):
     V, F = _shelf(height)
-    interface, base, tips = support_features(V, F, "z", 53.13)
+    interface, base, rim = support_features(V, F, "z", 53.13)
     H = INTERFACE_MM
     assert interface == pytest.approx(100.0 * min(height, H) / H)
     assert base == pytest.approx(100.0 * max(height - H, 0.0))
-    assert tips == 0.0  # the slab's lowest corners lie on its supported underside
+    # the 10 x 10 underside's outline (40 mm) at its height; the cube's bottom lies on the plate and costs nothing
+    assert rim == pytest.approx(40.0 * min(height, H) / H)
 
 
-def test_steep_faces_are_not_supported_and_a_hanging_tip_is():
+def test_the_outline_is_seen_from_above():
+    # the slab turned 20 degrees about x: its underside is still supported, its walls (70 degrees) are not;
+    # seen from above, the outline's edges along y shorten by cos(20), those along x do not
+    V, F = _shelf(20.0)
+    slab = V[:, 0] > 5
+    c, s = np.cos(np.radians(20)), np.sin(np.radians(20))
+    centre = V[slab].mean(axis=0)
+    V[slab] = (V[slab] - centre) @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]]).T + centre
+    _, _, rim = support_features(V, F, "z", 53.13)
+    assert rim == pytest.approx(2 * 10.0 + 2 * 10.0 * c)  # every outline edge is above H
+
+
+def test_steep_faces_are_not_supported():
     # a downward cone, 60 mm high over a 4 mm radius: its sides are ~86 degrees from the plate
     cone = trimesh.creation.cone(radius=4.0, height=60.0, sections=16)
     cone.apply_transform(trimesh.transformations.rotation_matrix(np.pi, (1, 0, 0)))  # apex down
@@ -37,32 +50,31 @@ def test_steep_faces_are_not_supported_and_a_hanging_tip_is():
     base.apply_translation((30, 0, 1))
     m = trimesh.util.concatenate([cone, base])
     V, F = np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
-    interface, base_volume, tips = support_features(V, F, "z", 53.13)
-    assert interface == 0.0 and base_volume == 0.0
-    assert tips == pytest.approx(20.0)
+    assert np.all(support_features(V, F, "z", 53.13) == 0.0)
+    assert np.all(support_features(V, F, "z", 87.0) > 0)  # past the cone's slope its sides are supported
 
 
-def _ramp(alpha_deg):
-    """A triangular prism whose underside rises from the plate at ``alpha_deg`` from it (up +z)."""
+def _ramp(alpha_deg, length=10.0):
+    """A triangular prism whose underside, ``length`` long, rises from the plate at ``alpha_deg`` (up +z)."""
     a = np.radians(alpha_deg)
-    tri = [(0.0, 0.0), (10 * np.cos(a), 10 * np.sin(a)), (0.0, 20.0)]  # (x, z): ramp, top, wall
+    tri = [(0.0, 0.0), (length * np.cos(a), length * np.sin(a)), (0.0, 2 * length)]  # (x, z): ramp, top, wall
     P = np.array([(x, y, z) for y in (0.0, 1.0) for x, z in tri])
     hull = trimesh.convex.convex_hull(P)
     return np.asarray(hull.vertices, float), np.asarray(hull.faces, np.int64)
 
 
 def test_the_threshold_is_the_profiles_plus_delta():
-    # an underside 58 degrees from the plate counts at 53.13 + DELTA (> 58) but not at 45 + DELTA (< 58)
-    assert 45.0 + DELTA < 58.0 < 53.13 + DELTA
-    V, F = _ramp(58.0)
-    a = np.radians(58.0)
-    # area of the ramp 10 x 1, projected 10 cos(a); its height rises 0 .. 10 sin(a) = 8.5 mm over the face
-    interface, base, _ = support_features(V, F, "z", 53.13)
-    assert interface > 0 and base > 0
-    h = 10 * np.sin(a) * np.array([1, 2]) / 3  # the two triangles' centroid heights
-    proj = 10 * np.cos(a) / 2
+    # an underside alpha degrees from the plate counts at 53.13 + DELTA (> alpha) but not at 45 + DELTA (< alpha)
+    alpha = 49.0 + DELTA
+    V, F = _ramp(alpha, length=20.0)
+    a = np.radians(alpha)
+    # the ramp 20 x 1, projected 20 cos(a); its height rises 0 .. 20 sin(a) over the face
+    interface, base, rim = support_features(V, F, "z", 53.13)
+    assert interface > 0 and base > 0 and rim > 0
+    h = 20 * np.sin(a) * np.array([1, 2]) / 3  # the two triangles' centroid heights
+    proj = 20 * np.cos(a) / 2
     assert base == pytest.approx(sum(proj * max(x - INTERFACE_MM, 0) for x in h))
-    assert np.all(support_features(V, F, "z", 45.0)[:2] == 0)
+    assert np.all(support_features(V, F, "z", 45.0) == 0)
 
 
 def test_features_scale_as_area_volume_and_length():

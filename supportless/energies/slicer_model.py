@@ -2,10 +2,10 @@
 
 The slicer supports a downward face whose slope from the build plate is below
 its threshold, with a dense *interface* of a few layers right under the face
-and sparse *base* columns from there down to the plate. Small downward tips
-(a vertex lower than all its neighbours, with no face flat enough to count)
-get a thin tower of their own. Three features of a pose in the print frame, in
-millimetres at the printed size, follow that picture:
+and sparse *base* columns from there down to the plate, and it grows each
+supported region by a fixed margin in millimetres (the contact area's
+expansion), which costs most on thin parts. Three features of a pose in the
+print frame, in millimetres at the printed size, follow that picture:
 
 ``interface`` (mm²)
     ``sum A_f |n_f . up| * min(h_f, H) / H`` over faces flatter than the
@@ -15,26 +15,28 @@ millimetres at the printed size, follow that picture:
 ``base`` (mm³)
     ``sum A_f |n_f . up| * max(h_f - H, 0)`` over the same faces: the
     column volume below the interface.
-``tips`` (mm)
-    The summed heights of vertices lower than all their neighbours, more than ``TIP_MIN_MM``
-    above the plate that lie on no face counted above.
+``rim`` (mm)
+    ``sum L_e * min(h_e, H) / H`` over the edges between a supported and an
+    unsupported face, ``L_e`` the edge's length seen from above (projected on
+    the plate) and ``h_e`` the height of its midpoint: the outline of the
+    supported regions, where the expansion adds support.
 
 The predicted support filament in mm is ``c . features`` with the
 coefficients :data:`COEFFICIENTS`. ``DELTA``, ``H`` and the coefficients were
-fitted once by non-negative least squares against PrusaSlicer 2.5 (its
-default print settings, models 60 mm tall) on the rest pose, random poses,
-random tilts and the found optima of every built-in figure and the shared
-models; the command that refits them (and prints the table of
+fitted once against PrusaSlicer 2.5 (its default print settings, models 60 mm
+tall) on the rest pose, random poses, random tilts and the found optima of
+the built-in figures and the shared models, at PrusaSlicer's default profile
+and at 30° and 60° profiles: ``DELTA`` and ``H`` on a grid, the coefficients'
+ratios to make the worst error in the predicted reduction (rest -> found)
+smallest, their scale by least squares of the relative filament error. The
+command that refits them (and prints the table of
 ``benchmarks/RESULTS.md``) is::
 
     python benchmarks/estimators_vs_slicer.py --fit
 
-The coefficients have a physical reading: ``base`` costs about a quarter of
-its volume in filament (0.107 mm of 1.75 mm filament per mm³: a sparse fill),
-``interface`` about 4 mm³ per mm² of footprint (a few dense layers and the
-expansion of the contact area). They belong to PrusaSlicer's default support settings (spacing,
-interface layers, contact distance); the threshold comes from the printer
-profile.
+The coefficients depend on PrusaSlicer's support settings (spacing,
+interface layers, contact distance, expansion); the threshold comes from the
+printer profile.
 """
 
 from __future__ import annotations
@@ -43,49 +45,45 @@ import numpy as np
 
 from .surface import prepare
 
-__all__ = ["COEFFICIENTS", "DELTA", "INTERFACE_MM", "TIP_MIN_MM", "FEATURES", "predicted_support_mm",
-           "support_features"]
+__all__ = ["COEFFICIENTS", "DELTA", "INTERFACE_MM", "FEATURES", "predicted_support_mm", "support_features"]
 
 #: The names of the features, in the order of :func:`support_features`' columns.
-FEATURES = ("interface", "base", "tips")
+FEATURES = ("interface", "base", "rim")
 
 #: Degrees added to the profile's threshold: PrusaSlicer's layer-by-layer
-#: overhang detection and the expansion of its contact areas support faces
-#: somewhat steeper than the nominal threshold.
-DELTA = 7.0
+#: overhang detection supports faces somewhat steeper than the nominal threshold.
+DELTA = 3.0
 
 #: Height of the dense interface under a supported face, mm.
-INTERFACE_MM = 3.0
+INTERFACE_MM = 6.0
 
-#: A lowest vertex this far above the plate (mm) or more gets a tower.
-TIP_MIN_MM = 0.5
-
-#: Filament mm per unit of each feature (:data:`FEATURES`), fitted on 87
-#: sliced poses of 11 models (benchmarks/slicer_samples.jsonl). The fit gives
-#: the tips no weight: measured there, they add nothing the footprint does not.
-COEFFICIENTS = (1.7488, 0.1069, 0.0)
+#: Filament mm per unit of each feature (:data:`FEATURES`), fitted on the
+#: sliced poses of benchmarks/slicer_samples.jsonl.
+COEFFICIENTS = (1.1617, 0.0596, 1.9044)
 
 
-def _tip_heights(H: np.ndarray, faces: np.ndarray, risky: np.ndarray) -> np.ndarray:
-    """Summed heights of unsupported tips, per pose.
+#: Poses x faces measured at once by :func:`predicted_support_mm` (bounds its memory).
+_CHUNK_ELEMENTS = 1 << 20
 
-    ``H`` (P, n) float64 heights above the plate, mm; ``risky`` (P, f) bool,
-    the supported faces. A tip is a vertex lower than all its neighbours, more than
-    :data:`TIP_MIN_MM` above the plate and on no supported face (those are
-    counted by the footprint). Returns (P,) float64.
+
+def _edge_faces(faces):
+    """The two faces on each edge of a closed surface.
+
+    ``faces`` (f, 3) int. Returns ``edges`` (e, 2) int64 vertex pairs and
+    ``left``, ``right`` (e,) int64 the faces on either side (edges met more
+    or fewer than twice, as on a surface that is not closed, are left out).
     """
-    E = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    a, b = E[:, 0], E[:, 1]
-    out = np.zeros(len(H))
-    for p in range(len(H)):
-        h = H[p]
-        not_tip = np.zeros(h.shape[0], bool)
-        not_tip[a[h[b] <= h[a]]] = True
-        not_tip[b[h[a] <= h[b]]] = True
-        not_tip[faces[risky[p]].ravel()] = True
-        tip = ~not_tip & (h > TIP_MIN_MM)
-        out[p] = h[tip].sum()
-    return out
+    F = np.asarray(faces, np.int64)
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(F)), 3)
+    order = np.lexsort((E[:, 1], E[:, 0]))
+    E, owner = E[order], owner[order]
+    same = np.all(E[:-1] == E[1:], axis=1)
+    # an edge shared by exactly two faces: equal to its successor, and neither to the one before nor after the pair
+    before = np.r_[False, same[:-1]]
+    after = np.r_[same[1:], False]
+    pair = np.nonzero(same & ~before & ~after)[0]
+    return E[pair], owner[pair], owner[pair + 1]
 
 
 def support_features(vertices, faces, up, overhang_angle, scale=1.0, delta=DELTA, interface_mm=INTERFACE_MM):
@@ -109,7 +107,7 @@ def support_features(vertices, faces, up, overhang_angle, scale=1.0, delta=DELTA
     Returns
     -------
     features : (P, 3) or (3,) float64
-        ``interface`` (mm²), ``base`` (mm³), ``tips`` (mm) per pose.
+        ``interface`` (mm²), ``base`` (mm³), ``rim`` (mm) per pose.
     """
     V, F, u, single = prepare(vertices, faces, up)
     if V.shape[-1] != 3:
@@ -127,9 +125,15 @@ def support_features(vertices, faces, up, overhang_angle, scale=1.0, delta=DELTA
     risky = along < -tau * area
     proj = np.where(risky, -along, 0.0)
     H = float(interface_mm)
+    edges, left, right = _edge_faces(F)
+    outline = risky[:, left] != risky[:, right]  # (P, e)
+    ends = V[:, edges]  # (P, e, 2, 3)
+    step = ends[:, :, 1] - ends[:, :, 0]
+    seen_from_above = np.linalg.norm(step - (step @ u)[..., None] * u, axis=-1)
+    h_edge = ends.sum(axis=2) @ u / 2.0 - plate
     features = np.stack([(proj * np.minimum(h, H)).sum(1) / H,
                          (proj * np.maximum(h - H, 0.0)).sum(1),
-                         _tip_heights(heights - plate, F, risky)], axis=1)
+                         (np.where(outline, seen_from_above, 0.0) * np.minimum(h_edge, H)).sum(1) / H], axis=1)
     return features[0] if single else features
 
 
@@ -154,5 +158,11 @@ def predicted_support_mm(vertices, faces, up, overhang_angle, scale=1.0, coeffic
     filament_mm : (P,) float64 or float
         Predicted support filament length, mm (1.75 mm filament).
     """
-    feats = support_features(vertices, faces, up, overhang_angle, scale)
-    return feats @ np.asarray(coefficients, np.float64)
+    V = np.asarray(vertices, np.float64)
+    c = np.asarray(coefficients, np.float64)
+    if V.ndim == 2:
+        return float(support_features(V, faces, up, overhang_angle, scale) @ c)
+    # poses in chunks: the edge arrays are (P, e, 2, 3)
+    chunk = max(1, _CHUNK_ELEMENTS // max(len(faces), 1))
+    return np.concatenate([support_features(V[i:i + chunk], faces, up, overhang_angle, scale) @ c
+                           for i in range(0, len(V), chunk)]) if len(V) else np.zeros(0)
