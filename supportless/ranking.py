@@ -24,7 +24,8 @@ from .energies.exact import self_intersects
 from .geometry import place_on_plate, print_pose
 from .profile import PrinterProfile
 from .rig import Rig
-from .search import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, pose_distance_deg
+from .search import (CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at,
+                     pose_distance_deg)
 from .slicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
 __all__ = ["RankedResult", "candidate_result", "distinct_poses", "slice_rank"]
@@ -80,14 +81,7 @@ def candidate_result(rig: Rig, result: PoseResult, angles: np.ndarray, rotation:
         ``value`` and ``terms`` of the new pose; the rest (history, settings,
         stats) unchanged.
     """
-    angles = np.asarray(angles, np.float64)
-    rotation = np.asarray(rotation, np.float64)
-    turned = not np.allclose(rotation, np.eye(rig.dim))
-    posed = place_on_plate(rig.pose(angles), rig.up)
-    value, terms, _ = result.objective.evaluate(angles, rotation if turned else None)
-    return dataclasses.replace(result, angles=angles, rotation=rotation, vertices=posed, value=float(value),
-                               terms={k: float(v) for k, v in terms.items()},
-                               print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
+    return measured_at(rig, result, angles, rotation)
 
 
 def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float = DISTINCT_DEGREES,

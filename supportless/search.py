@@ -12,6 +12,7 @@ print rotation: two more variables in 3D, one in 2D, in a second swarm, see
 from __future__ import annotations
 
 import time
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -27,7 +28,7 @@ from .settings import PSO_PRESETS, SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
 __all__ = ["CANDIDATE_TOLERANCE", "CMA_SHARE", "DISTINCT_DEGREES", "OPTIMIZERS", "PoseResult", "SwarmResult", "TURN_SHARE",
-           "distinct_candidates", "evolution_strategy", "optimize", "pose_distance_deg",
+           "distinct_candidates", "evolution_strategy", "measured_at", "optimize", "pose_distance_deg",
            "particle_swarm"]
 
 #: With ``orient="free"`` the search runs the pose-only swarm, then a swarm of
@@ -621,17 +622,42 @@ def distinct_candidates(candidates: dict, count: int, min_degrees: float = DISTI
     return kept
 
 
-def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
-    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface."""
-    angles, rotation = found.angles, found.rotation
+def measured_at(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.ndarray,
+                objective: Objective | None = None) -> PoseResult:
+    """``result`` with another pose and print rotation, measured with an objective.
+
+    Parameters
+    ----------
+    rig : Rig
+        The rig the pose is for (full resolution).
+    result : PoseResult
+        The result to take the rest from (history, settings, stats, candidates).
+    angles : (m, 3) float64
+        Relative Euler angles, radians.
+    rotation : (d, d) float64
+        Print rotation.
+    objective : Objective, optional
+        What measures the pose (default: ``result.objective``).
+
+    Returns
+    -------
+    result : PoseResult
+        With ``angles``, ``rotation``, ``vertices``, ``print_vertices``,
+        ``value``, ``terms`` and ``objective`` of the new measurement.
+    """
+    objective = result.objective if objective is None else objective
+    angles = np.asarray(angles, np.float64)
+    rotation = np.asarray(rotation, np.float64)
     turned = not np.allclose(rotation, np.eye(rig.dim))
     posed = place_on_plate(rig.pose(angles), rig.up)
-    R = rotation if turned else None
-    value, terms, _ = objective.evaluate(angles, R)
-    value, terms = float(value), {key: float(v) for key, v in terms.items()}
+    value, terms, _ = objective.evaluate(angles, rotation if turned else None)
+    return dataclasses.replace(result, angles=angles, rotation=rotation, vertices=posed, value=float(value),
+                               terms={k: float(v) for k, v in terms.items()}, objective=objective,
+                               print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
+
+
+def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
+    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface."""
     stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value))
-    return PoseResult(angles=angles, vertices=posed, value=value, history=found.history, terms=terms,
-                      settings=found.settings, objective=objective, interrupted=found.interrupted, fixed=found.fixed,
-                      term_history=found.term_history, runtime_seconds=time.perf_counter() - t0, stats=stats,
-                      rotation=rotation, print_vertices=print_pose(posed, rotation, rig.up) if turned else posed,
-                      candidates=found.candidates)
+    measured = measured_at(rig, found, found.angles, found.rotation, objective)
+    return dataclasses.replace(measured, stats=stats, runtime_seconds=time.perf_counter() - t0)

@@ -1,10 +1,8 @@
 """Slice-ranking: the cheapest of the search's distinct good poses, by a slicer."""
 
-import sys
-import textwrap
-
 import numpy as np
 import pytest
+from slicers import fake_exe, stand_in_slicer
 
 import supportless as sl
 from supportless.ranking import candidate_result, slice_rank
@@ -99,21 +97,7 @@ def test_cli_slice_rank_with_a_stand_in_slicer(tmp_path, monkeypatch):
 
     from supportless.cli import main
 
-    exe = tmp_path / "stand-in-slicer"
-    exe.write_text(f"#!{sys.executable}\n" + textwrap.dedent("""\
-        import sys
-        import numpy as np
-        args = sys.argv[1:]
-        if "--help" in args:
-            print("PrusaSlicer-0.0 stand-in"); sys.exit(0)
-        stl, out = args[-1], args[args.index("--output") + 1]
-        raw = open(stl, "rb").read()
-        n = int(np.frombuffer(raw[80:84], "<u4")[0])
-        rec = np.frombuffer(raw[84:84 + 50 * n], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
-        support = float(np.ptp(rec["v"][..., 0])) if "--support-material" in args else 0.0
-        open(out, "w").write(f"; filament used [mm] = {1000.0 + support!r}\\n; filament used [cm3] = 2.5\\n")
-        """))
-    exe.chmod(0o755)
+    exe = fake_exe(tmp_path, "stand-in-slicer", stand_in_slicer("float(np.ptp(rec['v'][..., 0]))"))
     monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(exe))
     out_stl, report = tmp_path / "out.stl", tmp_path / "report.json"
     r = CliRunner().invoke(main, ["optimize", "demo:branch", "--particles", "30", "--iterations", "10",

@@ -5,12 +5,11 @@ from __future__ import annotations
 import json
 import math
 import os
-import stat
-import sys
 import textwrap
 
 import numpy as np
 import pytest
+from slicers import fake_exe, stand_in_slicer
 
 from supportless import slicer as sl
 from supportless.errors import InputError, SupportlessError
@@ -178,13 +177,6 @@ def test_default_config_is_explicit():
 # --- finding the slicer and error handling, with fake executables ----------
 
 
-def _fake_exe(tmp_path, name, body):
-    p = tmp_path / name
-    p.write_text(f"#!{sys.executable}\n" + textwrap.dedent(body))
-    p.chmod(p.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
-    return str(p)
-
-
 def _box_vf():
     import trimesh
 
@@ -193,7 +185,7 @@ def _box_vf():
 
 
 def test_find_prusa_slicer_env_var(tmp_path, monkeypatch):
-    exe = _fake_exe(tmp_path, "my-slicer", "print('hi')\n")
+    exe = fake_exe(tmp_path, "my-slicer", "print('hi')\n")
     monkeypatch.setenv(sl.ENV_VAR, exe)
     assert find_prusa_slicer() == exe
     monkeypatch.setenv(sl.ENV_VAR, str(tmp_path / "does-not-exist"))
@@ -210,7 +202,7 @@ def test_slicer_not_found_message(monkeypatch, tmp_path):
 
 
 def test_slicer_failure_is_one_line_error(tmp_path, monkeypatch):
-    exe = _fake_exe(
+    exe = fake_exe(
         tmp_path,
         "failing-slicer",
         """\
@@ -232,13 +224,13 @@ def test_slicer_failure_is_one_line_error(tmp_path, monkeypatch):
 
 
 def test_slicer_timeout_is_clear_error(tmp_path, monkeypatch):
-    exe = _fake_exe(tmp_path, "slow-slicer", "import time\ntime.sleep(30)\n")
+    exe = fake_exe(tmp_path, "slow-slicer", "import time\ntime.sleep(30)\n")
     with pytest.raises(SlicerError, match="timed out after 0.5 s"):
         slice_check(_box_vf(), _box_vf(), timeout=0.5, slicer=exe)
 
 
 def test_unknown_preset(tmp_path):
-    exe = _fake_exe(tmp_path, "x", "pass\n")
+    exe = fake_exe(tmp_path, "x", "pass\n")
     with pytest.raises(ValueError, match="preset"):
         slice_check(_box_vf(), _box_vf(), config="nope", slicer=exe)
 
@@ -247,23 +239,11 @@ def test_unknown_preset(tmp_path):
 
 # Reads the binary STL it is given and reports 10 mm of support filament per mm
 # of height on the bed (none without --support-material), on top of 1000 mm.
-STAND_IN_SLICER = """\
-import sys
-import numpy as np
-args = sys.argv[1:]
-if "--help" in args:
-    print("PrusaSlicer-0.0 stand-in"); sys.exit(0)
-stl, out = args[-1], args[args.index("--output") + 1]
-raw = open(stl, "rb").read()
-n = int(np.frombuffer(raw[80:84], "<u4")[0])
-rec = np.frombuffer(raw[84:84 + 50 * n], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
-support = 10.0 * float(rec["v"][..., 2].max()) if "--support-material" in args else 0.0
-open(out, "w").write(f"; filament used [mm] = {1000.0 + support!r}\\n; filament used [cm3] = 2.5\\n")
-"""
+STAND_IN_SLICER = stand_in_slicer("10.0 * float(rec['v'][..., 2].max())")
 
 
 def test_slice_check_pipeline_with_a_stand_in_slicer(tmp_path):
-    exe = _fake_exe(tmp_path, "stand-in-slicer", STAND_IN_SLICER)
+    exe = fake_exe(tmp_path, "stand-in-slicer", STAND_IN_SLICER)
     V, F = _box_vf()  # a 10-unit cube about the origin
     keep = tmp_path / "keep"
     r = slice_check((V, F), (V * [1.0, 0.5, 1.0], F), up=(0, 1, 0), height_mm=30.0, slicer=exe, keep_dir=keep)
@@ -292,7 +272,7 @@ def test_slice_check_pipeline_with_a_stand_in_slicer(tmp_path):
 def test_slice_check_reads_mesh_files_through_io(tmp_path):
     import supportless
 
-    exe = _fake_exe(tmp_path, "stand-in-slicer", STAND_IN_SLICER)
+    exe = fake_exe(tmp_path, "stand-in-slicer", STAND_IN_SLICER)
     V, F = _box_vf()
     supportless.write_mesh(tmp_path / "box.obj", V, F)
     r = slice_check(tmp_path / "box.obj", str(tmp_path / "box.obj"), up=(0, 0, 1), height_mm=20.0, slicer=exe)
@@ -307,7 +287,7 @@ def test_slice_check_reads_mesh_files_through_io(tmp_path):
     ("2d", "posed mesh: only 3D meshes can be sliced"),
 ])
 def test_bad_mesh_arrays_are_input_errors_before_slicing(tmp_path, posed, fragment):
-    exe = _fake_exe(tmp_path, "never-run", "import sys\nsys.exit(99)\n")
+    exe = fake_exe(tmp_path, "never-run", "import sys\nsys.exit(99)\n")
     V, F = _box_vf()
     bad = {"bad faces": (V[:2], F), "nan": (V * np.nan, F), "2d": (V[:, :2], F)}[posed]
     with pytest.raises(InputError) as info:
@@ -441,7 +421,7 @@ STAND_IN_WITH_TIME = STAND_IN_SLICER.replace(
 def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path):
     from supportless.profile import read_printer_profile
 
-    exe = _fake_exe(tmp_path, "stand-in-slicer", STAND_IN_WITH_TIME)
+    exe = fake_exe(tmp_path, "stand-in-slicer", STAND_IN_WITH_TIME)
     ini = tmp_path / "petg.ini"
     ini.write_text("filament_density = 1.27\nfilament_diameter = 2.85\nsupport_material_threshold = 40\n")
     profile = read_printer_profile(ini)
