@@ -22,7 +22,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = [
-    "MESH_FORMATS", "POSE_FORMAT", "atomic_path", "check_closed_surface", "check_mesh_arrays", "edge_counts",
+    "MESH_FORMATS", "POSE_FORMAT", "atomic_path", "check_closed_surface", "check_mesh_arrays", "check_skeleton", "edge_counts",
     "merge_duplicate_vertices", "read_dmat", "read_mesh", "read_pose", "read_print_rotation", "read_tet_mesh", "read_tgf", "write_dmat",
     "write_json", "write_mesh", "write_pose", "write_tet_mesh", "write_text", "write_tgf",
 ]
@@ -320,12 +320,78 @@ def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
 # --------------------------------------------------------------------------- #
 # TGF skeletons
 # --------------------------------------------------------------------------- #
+def check_skeleton(joints: np.ndarray, bones: np.ndarray, path: str | os.PathLike | None = None) -> None:
+    """Refuse a skeleton that is not a tree of bones with length.
+
+    Parameters
+    ----------
+    joints : (j, d) float64
+        Joint positions.
+    bones : (m, 2) int64
+        0-based ``[root, tip]`` joint indices, in range.
+    path : str or os.PathLike, optional
+        The skeleton's file, for the message.
+
+    Raises
+    ------
+    InputError
+        One line naming the bones or joints (1-based, as in a TGF file) at
+        fault: a bone listed twice, a joint at the tip of two bones, a cycle
+        of bones, a bone of zero length, or two joints of bones at one place.
+    """
+    J = np.asarray(joints, np.float64)
+    B = np.asarray(bones, np.int64)
+    seen: dict[tuple[int, int], int] = {}
+    for k, (a, b) in enumerate(B.tolist()):
+        key = (min(a, b), max(a, b))
+        if key in seen:
+            raise InputError(path, f"bones {seen[key] + 1} and {k + 1} both join joints {a + 1} and {b + 1}; "
+                                   f"list each bone once")
+        seen[key] = k
+    parent_bone = {}
+    for k, tip in enumerate(B[:, 1].tolist()):
+        if tip in parent_bone:
+            raise InputError(path, f"joint {tip + 1} is the tip of bones {parent_bone[tip] + 1} and {k + 1}; a "
+                                   f"skeleton is a tree: each joint ends at most one bone (write bones root -> tip)")
+        parent_bone[tip] = k
+    # every joint has at most one bone into it: following parents from any bone ends at a root or runs in a cycle
+    for k in range(len(B)):
+        path_bones, j = [k], int(B[k, 0])
+        while j in parent_bone:
+            p = parent_bone[j]
+            if p == k:
+                names = " -> ".join(str(b + 1) for b in reversed(path_bones))
+                raise InputError(path, f"bones {names} form a cycle; a skeleton is a tree with a root")
+            if len(path_bones) > len(B):
+                break  # a cycle further up, found when its own bones are visited
+            path_bones.append(p)
+            j = int(B[p, 0])
+    used = np.unique(B)
+    size = float(np.ptp(J[used], axis=0).max()) if len(used) else 0.0
+    tol = 1e-9 * max(size, np.finfo(float).tiny)
+    lengths = np.linalg.norm(J[B[:, 1]] - J[B[:, 0]], axis=1)
+    short = np.flatnonzero(lengths <= tol)
+    if len(short):
+        k = int(short[0])
+        raise InputError(path, f"bone {k + 1} has zero length: joints {B[k, 0] + 1} and {B[k, 1] + 1} are at the "
+                               f"same place; move or remove one")
+    P = J[used]
+    order = np.lexsort(P.T[::-1])
+    same = np.flatnonzero(np.all(np.abs(np.diff(P[order], axis=0)) <= tol, axis=1))
+    if len(same):
+        a, b = sorted((int(used[order[same[0]]]), int(used[order[same[0] + 1]])))
+        raise InputError(path, f"joints {a + 1} and {b + 1} are at the same place {np.round(J[a], 6).tolist()}; "
+                               f"bones that share a point must share the joint")
+
+
 def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     """Read a skeleton in libigl's TGF format.
 
     A joint section (``index x y z [extra columns]``), a line ``#``, a bone
     section (``i j [extra columns]``, 1-based joint indices) and optionally a
-    final ``#``. Extra columns are ignored.
+    final ``#``. Extra columns are ignored. Joints are placed by their index
+    column (1..j, in any order); the skeleton is checked with
+    :func:`check_skeleton`. A UTF-8 byte-order mark is skipped.
 
     Parameters
     ----------
@@ -334,23 +400,24 @@ def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     joints : (j, 3) float64
-        Joint positions in file order.
+        Joint positions, row ``i - 1`` for index ``i``.
     bones : (m, 2) int64
         0-based joint indices ``[root, tip]`` in file order.
 
     Raises
     ------
     InputError
-        Missing file, malformed line, empty skeleton, index out of range.
+        Missing file, malformed line, empty skeleton, index out of range,
+        joint indices that are not 1..j, a skeleton that is not a tree.
     """
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "no such file")
     try:
-        lines = path.read_text().splitlines()
+        lines = path.read_text(encoding="utf-8-sig").splitlines()
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(path, f"cannot read skeleton: {_one_line(exc)}") from None
-    joints, bones, section = [], [], 0
+    joints, index, bones, section = [], [], [], 0
     for lineno, line in enumerate(lines, 1):
         tokens = line.split()
         if not tokens:
@@ -363,6 +430,7 @@ def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
                 if len(tokens) < 4:
                     raise ValueError
                 joints.append([float(t) for t in tokens[1:4]])
+                index.append((int(tokens[0]), lineno))
             elif section == 1:
                 if len(tokens) < 2:
                     raise ValueError
@@ -375,6 +443,19 @@ def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     if not bones:
         raise InputError(path, "skeleton has no bones; after the joints and a '#' line, list bones as 'i j'")
     J = np.array(joints, dtype=np.float64)
+    given = np.array([i for i, _ in index])
+    if sorted(given.tolist()) == list(range(len(J))):
+        given = given + 1  # numbered from 0
+    elif sorted(given.tolist()) != list(range(1, len(J) + 1)):
+        counts = np.bincount(np.clip(given, 0, len(J) + 1), minlength=len(J) + 2)
+        dup = np.flatnonzero(counts[1:len(J) + 1] > 1)
+        if len(dup):
+            lines_of = [n for i, n in index if i == dup[0] + 1]
+            raise InputError(path, f"joint index {dup[0] + 1} appears on lines {lines_of[0]} and {lines_of[1]}; "
+                                   f"number joints 1..{len(J)}, once each")
+        i, n = next((i, n) for i, n in index if not 1 <= i <= len(J))
+        raise InputError(path, f"line {n}: joint index {i} is not within 1..{len(J)}; number joints 1..{len(J)}")
+    J[given - 1] = J.copy()
     B = np.array(bones, dtype=np.int64) - 1
     bad = np.flatnonzero((B < 0).any(1) | (B >= len(J)).any(1))
     if len(bad):
@@ -388,6 +469,7 @@ def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(path, f"bone {i + 1} joins joint {bones[i][0]} to itself")
     if not np.all(np.isfinite(J)):
         raise InputError(path, "joint coordinates contain NaN or infinity")
+    check_skeleton(J, B, path)
     return J, B
 
 

@@ -28,7 +28,7 @@ from . import kinematics as kin
 from .energies.balance import centre_of_mass_operator
 from .errors import InputError
 from .geometry import parse_up, signed_volume
-from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .io import atomic_path, check_closed_surface, check_skeleton, read_dmat, read_mesh, read_tet_mesh, read_tgf
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, compute_weights
 
@@ -288,6 +288,7 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         raise InputError(mesh_path, "the mesh has no triangles")
     if bones.min() < 0 or bones.max() >= len(joints):
         raise InputError(skel_path, f"a bone refers to a joint out of range 0..{len(joints) - 1}")
+    check_skeleton(joints, bones, skel_path)
     if F.min() < 0 or F.max() >= len(V):
         raise InputError(mesh_path, "a face refers to a vertex out of range")
     if joints.shape[1] != V.shape[1] and not (V.shape[1] == 2 and joints.shape[1] == 3):

@@ -338,3 +338,16 @@ def test_turning_only_needs_no_free_bone(branch_files, tmp_path):
     keep = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "-q", "--joint-limit", 0,
                "--orient", "keep", "-o", tmp_path / "kept.obj")
     assert keep.exit_code == 2 and "--orient free" in keep.output
+
+
+# ------------------------------------------------------------- issue 18: robustness
+
+
+def test_a_skeleton_with_a_cycle_is_one_line_not_a_hang(tmp_path, branch_files):
+    tgf = tmp_path / "cycle.tgf"
+    tgf.write_text("1 0 0 0\n2 0 1 0\n3 1 1 0\n#\n1 2\n2 3\n3 1\n")
+    for command in ("optimize", "prepare"):
+        extra = ("-o", tmp_path / "out.stl") if command == "optimize" else ()
+        result = run(command, branch_files["mesh"], "--skeleton", tgf, "--cache-dir", tmp_path / "cache", *extra)
+        assert_user_error(result, "cycle.tgf", "form a cycle")
+    assert not (tmp_path / "out.stl").exists()

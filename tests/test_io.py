@@ -289,6 +289,15 @@ def test_shared_tgf_files(shared_file, name, joints, bones):
     ("1 0 0 0\n2 0 1 0\n#\n", ["no bones"]),
     ("", ["no joints"]),
     ("1 0 nan 0\n2 0 1 0\n#\n1 2\n", ["NaN"]),
+    # not a tree (issue 18: a cycle used to hang the search)
+    ("1 0 0 0\n2 0 1 0\n3 1 1 0\n#\n1 2\n2 3\n3 1\n", ["bones", "form a cycle"]),
+    ("1 0 0 0\n2 0 1 0\n3 1 1 0\n#\n1 3\n2 3\n", ["joint 3 is the tip of bones 1 and 2"]),
+    ("1 0 0 0\n2 0 1 0\n3 1 1 0\n#\n1 2\n2 1\n", ["bones 1 and 2 both join joints"]),
+    ("1 0 0 0\n2 0 0 0\n3 1 1 0\n#\n1 2\n2 3\n", ["bone 1 has zero length", "joints 1 and 2"]),
+    ("1 0 0 0\n2 0 1 0\n3 0 1 0\n4 1 1 0\n#\n1 2\n3 4\n", ["joints 2 and 3 are at the same place"]),
+    # the index column
+    ("1 0 0 0\n1 0 1 0\n#\n1 2\n", ["joint index 1 appears on lines 1 and 2"]),
+    ("1 0 0 0\n5 0 1 0\n#\n1 2\n", ["line 2: joint index 5 is not within 1..2"]),
 ])
 def test_bad_tgf(tmp_path, text, fragments):
     path = tmp_path / "bad.tgf"
@@ -299,6 +308,31 @@ def test_bad_tgf(tmp_path, text, fragments):
     assert message.startswith(f"{path}: ") and "\n" not in message
     for fragment in fragments:
         assert fragment in message
+
+
+def test_tgf_joints_are_placed_by_their_index_column(tmp_path):
+    (tmp_path / "x.tgf").write_text("2 0 1 0\n3 0 2 0\n1 0 0 0\n#\n1 2\n2 3\n")
+    J, B = sl.read_tgf(tmp_path / "x.tgf")
+    np.testing.assert_array_equal(J, [[0, 0, 0], [0, 1, 0], [0, 2, 0]])
+    (tmp_path / "z.tgf").write_text("1 0 1 0\n0 0 0 0\n2 0 2 0\n#\n1 2\n2 3\n")  # numbered from 0
+    np.testing.assert_array_equal(sl.read_tgf(tmp_path / "z.tgf")[0], J)
+
+
+def test_tgf_with_a_byte_order_mark_reads_as_without(tmp_path):
+    text = "1 0.5 0 0\n2 0.5 1 0\n#\n1 2\n"
+    (tmp_path / "plain.tgf").write_text(text, encoding="utf-8")
+    (tmp_path / "bom.tgf").write_text(text, encoding="utf-8-sig")
+    assert (tmp_path / "bom.tgf").read_bytes().startswith(b"\xef\xbb\xbf")
+    for a, b in zip(sl.read_tgf(tmp_path / "plain.tgf"), sl.read_tgf(tmp_path / "bom.tgf")):
+        np.testing.assert_array_equal(a, b)
+    assert sl.read_tgf(tmp_path / "bom.tgf")[0][0].tolist() == [0.5, 0.0, 0.0]
+
+
+def test_a_rig_built_from_arrays_refuses_a_cyclic_skeleton():
+    V, F = sl.demo_figure("branch")[:2]
+    J = np.array([[0.0, 0, 0], [0, 1, 0], [1, 1, 0]])
+    with pytest.raises(sl.InputError, match="form a cycle"):
+        sl.prepare_rig(V, F, J, np.array([[0, 1], [1, 2], [2, 0]]), up="y")
 
 
 def test_missing_tgf(tmp_path):
