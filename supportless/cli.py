@@ -15,11 +15,17 @@ import click
 import numpy as np
 
 from .errors import InputError, SupportlessError
+from .interrupt import deferred_interrupt, requested as interrupt_requested
+from .terminal import ClosableStdout, drop_stdout
 from .shapes import DEMO_FIGURES
 
 __all__ = ["main"]
 
 EXIT_USER_ERROR = 2
+#: Exit status when an output file could not be written (the others were).
+EXIT_WRITE_FAILED = 1
+#: Exit status of a search stopped by Ctrl-C, after its best pose is written.
+EXIT_INTERRUPTED = 130
 #: Exit status when a tool the command needs (PrusaSlicer) is missing or fails.
 EXIT_MISSING_TOOL = 3
 
@@ -32,7 +38,7 @@ def _fail(message: str) -> None:
 def _console():
     from rich.console import Console
 
-    return Console(stderr=False, highlight=False)
+    return Console(file=ClosableStdout(sys.stdout), highlight=False)
 
 
 def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None):
@@ -90,7 +96,10 @@ class _Group(click.Group):
             _fail(str(exc))
         except KeyboardInterrupt:
             click.echo("supportless: interrupted", err=True)
-            sys.exit(130)
+            sys.exit(EXIT_INTERRUPTED)
+        except BrokenPipeError:  # the reader of stdout went away; the files are written before the summary
+            drop_stdout()
+            sys.exit(0)
 
 
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
@@ -268,35 +277,63 @@ def _summary_table(report: dict):
     return table
 
 
-def _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=None):
+def _write_outputs(rig, result, report, output, pose, report_path, pictures, upright=None):
     """Write the posed mesh (print orientation), the upright mesh, the pose, the pictures and the report.
 
-    Returns [(label, path)].
+    A file that cannot be written is one line on stderr; the others are
+    still written. Returns ([(label, path)] written, number that failed).
     """
     from .io import write_json, write_pose
     from .report import write_pictures
 
-    written = []
-    if output:
-        kind = _write_posed(output, rig, result.angles, result.vertices, result.print_vertices)
-        written.append((f"posed {kind}", output))
-    if upright:
-        kind = _write_posed(upright, rig, result.angles, result.vertices, result.vertices)
-        written.append((f"posed {kind.replace('as printed', 'standing')}", upright))
-    if pose:
+    def posed(path, vertices, standing_label=False):
+        kind = _write_posed(path, rig, result.angles, result.vertices, vertices)
+        return [(f"posed {kind.replace('as printed', 'standing') if standing_label else kind}", path)]
+
+    def pose_file():
         extra = {"objective": result.value}
         if rig.labels is not None:
             extra["bone_names"] = rig.bone_names()
         write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation)
-        written.append(("pose", pose))
-    if pictures:
-        written += write_pictures(pictures, rig, result, report)
-    if report_path:
+        return [("pose", pose)]
+
+    def report_file():
         write_json(report_path, report)
-        written.append(("report", report_path))
+        return [("report", report_path)]
+
+    steps = [(output, lambda: posed(output, result.print_vertices)),
+             (upright, lambda: posed(upright, result.vertices, standing_label=True)),
+             (pose, pose_file), (pictures, lambda: write_pictures(pictures, rig, result, report)),
+             (report_path, report_file)]
+    written, failed = [], 0
+    for path, write in steps:
+        if not path:
+            continue
+        try:
+            written += write()
+        except OSError as exc:
+            failed += 1
+            reason = exc.strerror or str(exc)
+            click.echo(f"supportless: error: {exc.filename or path}: cannot write: {reason}", err=True)
+    return written, failed
+
+
+def _list_written(console, written) -> None:
     for label, path in written:
         console.print(f"  {label}: {path}")
-    return written
+
+
+def _check_outputs(files=(), folders=(), inputs=()) -> None:
+    """Every output location writable and none an input, before any work (one line and exit 2 otherwise)."""
+    from .paths import check_output_paths
+
+    check_output_paths(files, folders, inputs)
+
+
+def _inputs(model, skeleton=None, tets=None, weights=None, *more):
+    """The files a command reads: MODEL, its skeleton (given or MODEL.tgf), tets, weights and ``more``."""
+    default_skeleton = Path(model).with_suffix(".tgf") if model and not str(model).startswith("demo:") else None
+    return [p for p in (model, skeleton, default_skeleton, tets, weights, *more) if p]
 
 
 @main.command()
@@ -325,7 +362,10 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
 
     for path in (output, upright_out):
         _check_mesh_path(path)
-    profile = _printer_profile(search_options.pop("printer_profile"))
+    profile_path = search_options.pop("printer_profile")
+    _check_outputs([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose)],
+                   [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
+    profile = _printer_profile(profile_path)
     settings = _settings(profile, **search_options)
     console = _console()
     if slice_rank_count > 1:
@@ -333,16 +373,25 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
     if slice_rank_count > 1 and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
-    result = _run_search(rig, console, settings, quiet)
-    if result.interrupted:
-        console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
-    extra = {"printer_profile": profile.summary()}
-    if slice_rank_count > 1 and not result.interrupted:
-        ranked = _slice_rank(rig, result, slice_rank_count, console, profile)
-        result, extra["slice_rank"] = ranked.result, ranked.to_dict()
-    report = build_report(rig, result) | extra
-    _print_results(console, report)
-    _write_outputs(rig, result, report, output, pose, report_path, pictures, console, upright=upright_out)
+    with deferred_interrupt():  # Ctrl-C stops the search; what it found is still written
+        result = _run_search(rig, console, settings, quiet)
+        if result.interrupted:
+            console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
+        extra = {"printer_profile": profile.summary()}
+        if slice_rank_count > 1 and not result.interrupted:
+            ranked = _slice_rank(rig, result, slice_rank_count, console, profile)
+            if ranked is not None:
+                result, extra["slice_rank"] = ranked.result, ranked.to_dict()
+        report = build_report(rig, result) | extra
+        written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures,
+                                         upright=upright_out)
+    _print_results(console, report)  # after the files: a closed stdout (| head) loses nothing
+    _list_written(console, written)
+    if failed:
+        sys.exit(EXIT_WRITE_FAILED)
+    if result.interrupted or interrupt_requested():
+        click.echo("supportless: interrupted: the best pose found so far is written", err=True)
+        sys.exit(EXIT_INTERRUPTED)
     if slice_check_flag:
         _slice_and_report(rig, result, report, report_path, console, profile=profile)
 
@@ -366,6 +415,9 @@ def _slice_rank(rig, result, count, console, profile):
     try:
         ranked = slice_rank(rig, result, count, profile=profile)
     except SlicerError as exc:
+        if interrupt_requested():  # Ctrl-C reached the slicer too: keep the search's own pose
+            console.print("[yellow]interrupted: slice-ranking skipped, writing the search's pose[/yellow]")
+            return None
         click.echo(f"supportless: error: slice-ranking failed: {exc}", err=True)
         sys.exit(EXIT_MISSING_TOOL)
     for e in ranked.entries:
@@ -435,6 +487,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, po
 
     for path in (output, upright_out):
         _check_mesh_path(path)
+    _check_outputs([("-o", output), ("--upright-out", upright_out)], (), _inputs(model, skeleton, tets, weights, pose))
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     angles = read_pose(pose, rig.bones)
     R = read_print_rotation(pose, rig.dim)
@@ -545,6 +598,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     from .rig import load_rig
 
     settings = _settings(particles=particles, iterations=iterations, seed=seed)
+    _check_outputs((), [("--out", out_dir)])
     console = _console()
     out = Path(out_dir)
     t0 = time.perf_counter()
@@ -560,13 +614,17 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
                            risky=risky, title=f"{figure}: rest pose")
     result = _run_search(rig, console, settings, quiet)
     report = build_report(rig, result)
+    posed_ext = "stl" if rig.dim == 3 else "obj"
+    report_path = out / f"{figure}-report.json"
+    written, failed = _write_outputs(rig, result, report, out / f"{figure}-posed.{posed_ext}",
+                                     out / f"{figure}-pose.json", report_path, out,
+                                     upright=out / f"{figure}-posed-standing.{posed_ext}")
     _print_results(console, report)
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
-    posed_ext = "stl" if rig.dim == 3 else "obj"
-    report_path = out / f"{figure}-report.json"
-    _write_outputs(rig, result, report, out / f"{figure}-posed.{posed_ext}", out / f"{figure}-pose.json",
-                   report_path, out, console, upright=out / f"{figure}-posed-standing.{posed_ext}")
+    _list_written(console, written)
+    if failed:
+        sys.exit(EXIT_WRITE_FAILED)
     if rig.dim == 3:  # the slicer's figures when PrusaSlicer is there; the demo runs without it
         _slice_and_report(rig, result, report, report_path, console, required=False)
 

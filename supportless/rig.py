@@ -27,8 +27,9 @@ import numpy as np
 from . import kinematics as kin
 from .energies.balance import centre_of_mass_operator
 from .errors import InputError
+from .skeleton import check_skeleton
 from .geometry import parse_up, signed_volume
-from .io import atomic_path, check_closed_surface, check_skeleton, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, compute_weights
 
@@ -276,10 +277,6 @@ class Rig:
 # --------------------------------------------------------------------------- #
 # validation
 # --------------------------------------------------------------------------- #
-def _is_planar(V: np.ndarray, joints: np.ndarray) -> bool:
-    return V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
-
-
 def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joints_inside=True, pivots_only=False):
     """Validate and normalise arrays; returns (V, F, joints, dim, warnings)."""
     if len(bones) == 0:
@@ -293,7 +290,7 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         raise InputError(mesh_path, "a face refers to a vertex out of range")
     if joints.shape[1] != V.shape[1] and not (V.shape[1] == 2 and joints.shape[1] == 3):
         raise InputError(skel_path, f"skeleton is {joints.shape[1]}D but the mesh is {V.shape[1]}D")
-    if _is_planar(V, joints):
+    if V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0)):  # planar
         V2, J2 = V[:, :2], joints[:, :2]
         if signed_volume(V2, F) < 0:
             F = F[:, ::-1].copy()

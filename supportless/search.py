@@ -20,6 +20,7 @@ import numpy as np
 
 from .energies.exact import self_intersects
 from .geometry import place_on_plate, print_pose
+from .interrupt import deferred_interrupt, requested
 from .kinematics import euler_to_matrix
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
@@ -138,9 +139,9 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
     g = int(np.argmin(best_f))
     g_x, g_f = best_X[g].copy(), float(best_f[g])
     history = [g_f]
-    interrupted = False
+    interrupted = requested()
     try:
-        for it in range(iterations):
+        for it in range(0 if interrupted else iterations):
             r_p = rng.random((particles, k))
             r_g = rng.random((particles, k))
             Vel = inertia * Vel + cognitive * r_p * (best_X - X) + social * r_g * (g_x - X)
@@ -156,7 +157,7 @@ def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
             if best_f[g] < g_f:
                 g_x, g_f = best_X[g].copy(), float(best_f[g])
             history.append(g_f)
-            if callback is not None and callback(it + 1, g_x, g_f) is False:
+            if callback is not None and callback(it + 1, g_x, g_f) is False or requested():
                 interrupted = True
                 break
     except KeyboardInterrupt:
@@ -241,9 +242,9 @@ def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray,
 
     es = strategy(g_x)
     archive_x, archive_f = [X], [values]
-    interrupted = False
+    interrupted = requested()
     try:
-        for it in range(iterations):
+        for it in range(0 if interrupted else iterations):
             if es.stop():
                 es, bound = strategy(g_x), np.inf
             Z = np.asarray(es.ask(), np.float64)
@@ -262,7 +263,7 @@ def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray,
             es.tell(list(Z), ranked.tolist())
             bound = float(np.median(ranked))
             history.append(g_f)
-            if callback is not None and callback(it + 1, g_x, g_f) is False:
+            if callback is not None and callback(it + 1, g_x, g_f) is False or requested():
                 interrupted = True
                 break
     except KeyboardInterrupt:
@@ -426,12 +427,24 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     -------
     result : PoseResult
         Never worse than the rest pose (the rest pose is one of the particles).
+        On Ctrl-C the search stops after the iteration under way and returns
+        its best so far with ``interrupted=True``
+        (:func:`supportless.interrupt.deferred_interrupt`).
     """
+    with deferred_interrupt():
+        return _optimize(rig, settings, objective=objective, start=start, start_rotation=start_rotation,
+                         callback=callback, **changes)
+
+
+def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Objective | None = None,
+              start: np.ndarray | None = None, start_rotation: np.ndarray | None = None,
+              callback: Callable[[int, dict], bool | None] | None = None, **changes) -> PoseResult:
+    """:func:`optimize` without the Ctrl-C handling."""
     t0 = time.perf_counter()
     settings = (settings or SearchSettings()).replace(**changes)
     coarse = rig.coarse_rig() if objective is None else None
     if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
-        found = optimize(coarse, settings, start=start, start_rotation=start_rotation, callback=callback)
+        found = _optimize(coarse, settings, start=start, start_rotation=start_rotation, callback=callback)
         return _on_full_surface(rig, found, settings.objective(rig), t0)
     if objective is None:
         objective = settings.objective(rig)

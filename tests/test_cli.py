@@ -167,29 +167,61 @@ def test_slice_check_without_the_slicer_keeps_every_output(branch_files, tmp_pat
     assert "slice_check" not in json.loads((tmp_path / "report.json").read_text())
 
 
-def test_ctrl_c_during_the_search_writes_the_best_pose(branch_files, tmp_path, monkeypatch):
-    """A KeyboardInterrupt in the third swarm evaluation: the best pose so far is still written."""
+def _interrupt_at(monkeypatch, call, how):
+    """Patch the swarm's objective so that Ctrl-C arrives at its ``call``-th evaluation.
+
+    ``how``: ``"signal"`` sends SIGINT to this process just before the evaluation (a real Ctrl-C,
+    handled between bytecodes), ``"during"`` sends it from another thread while the compiled kernels
+    run, ``"raise"`` raises KeyboardInterrupt there (as a second Ctrl-C does).
+    """
+    import os
+    import signal
+    import threading
+
     from supportless.objective import Objective
 
     calls = {"n": 0}
     bounded = Objective.bounded
 
-    def interrupt_on_third_call(self, angles, bound, rotations=None):
+    def patched(self, angles, bound, rotations=None):
         calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
+        if calls["n"] == call:
+            if how == "raise":
+                raise KeyboardInterrupt
+            if how == "signal":
+                os.kill(os.getpid(), signal.SIGINT)
+            else:
+                threading.Timer(0.001, os.kill, (os.getpid(), signal.SIGINT)).start()
         return bounded(self, angles, bound, rotations)
 
-    monkeypatch.setattr(Objective, "bounded", interrupt_on_third_call)
+    monkeypatch.setattr(Objective, "bounded", patched)
+    return calls
+
+
+@pytest.mark.parametrize("call, how", [(1, "signal"), (3, "signal"), (3, "during"), (20, "during"),
+                                       (60, "signal"), (60, "during"), (5, "raise")])
+def test_ctrl_c_during_the_search_writes_complete_outputs_and_exits_130(branch_files, tmp_path, monkeypatch,
+                                                                         call, how):
+    """Ctrl-C at several moments (the first evaluation, the pose phase, the turning phase from call 52 on):
+    every output is complete, the report says interrupted, and the exit status is 130."""
+    import signal
+
+    calls = _interrupt_at(monkeypatch, call, how)
+    handler = signal.getsignal(signal.SIGINT)
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
                  "--iterations", 50, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
-                 "--report", tmp_path / "report.json")
-    assert result.exit_code == 0, (result.output, result.exception)
-    assert "stopped early" in result.stdout
+                 "--report", tmp_path / "report.json", "--pictures", tmp_path / "pictures")
+    assert calls["n"] >= call
+    assert result.exit_code == 130, (result.output, result.exception)
+    assert "Traceback" not in result.output and "interrupted" in result.stderr
     report = json.loads((tmp_path / "report.json").read_text())
-    assert report["interrupted"] is True and len(report["history"]) == 2  # initial swarm + one iteration
+    assert report["interrupted"] is True
+    assert len(report["history"]) < 101  # stopped before the end of both phases
     assert sl.read_pose(tmp_path / "pose.json", branch_files["bones"]).shape == (3, 3)
-    assert (tmp_path / "posed.stl").stat().st_size > 0
+    V, F = sl.read_mesh(tmp_path / "posed.stl")
+    assert len(F) == len(sl.read_mesh(branch_files["mesh"])[1])
+    assert any(p.suffix == ".png" for p in (tmp_path / "pictures").iterdir())
+    assert signal.getsignal(signal.SIGINT) is handler  # the usual Ctrl-C is back
 
 
 def test_search_options_reach_the_search(branch_files, tmp_path):
@@ -351,3 +383,68 @@ def test_a_skeleton_with_a_cycle_is_one_line_not_a_hang(tmp_path, branch_files):
         result = run(command, branch_files["mesh"], "--skeleton", tgf, "--cache-dir", tmp_path / "cache", *extra)
         assert_user_error(result, "cycle.tgf", "form a cycle")
     assert not (tmp_path / "out.stl").exists()
+
+
+def test_an_output_that_is_an_input_is_refused_before_any_work(branch_files, tmp_path):
+    mesh, skeleton = Path(branch_files["mesh"]), Path(branch_files["skeleton"])
+    before = mesh.read_bytes(), skeleton.read_bytes()
+    link = tmp_path / "link.obj"
+    link.symlink_to(mesh)
+    base = ("optimize", mesh, "--skeleton", skeleton, "--cache-dir", tmp_path / "cache", "-q")
+    assert_user_error(run(*base, "-o", mesh), "-o would overwrite the input")
+    assert_user_error(run(*base, "-o", tmp_path / "a.stl", "--report", skeleton), "--report would overwrite")
+    assert_user_error(run(*base, "-o", tmp_path / "a.stl", "--pose", link), "--pose would overwrite")
+    assert_user_error(run(*base, "-o", tmp_path / "a.stl", "--upright-out", tmp_path / "a.stl"),
+                      "--upright-out and -o are the same path")
+    pose = tmp_path / "pose.json"
+    pose.write_text("{}")
+    assert_user_error(run("apply", mesh, "--skeleton", skeleton, "--pose", pose, "-o", mesh), "-o would overwrite")
+    assert (mesh.read_bytes(), skeleton.read_bytes()) == before
+    assert not (tmp_path / "cache").exists()  # refused before the rig was prepared
+
+
+def test_impossible_output_locations_are_refused_before_the_search(branch_files, tmp_path):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("x")
+    base = ("optimize", branch_files["mesh"], "--cache-dir", tmp_path / "cache", "-q")
+    assert_user_error(run(*base, "-o", blocker / "out.stl"), "a-file is a file, not a folder")
+    assert_user_error(run(*base, "-o", tmp_path / "ok.stl", "--report", blocker / "deep" / "r.json"), "--report")
+    # click itself refuses a file given for a folder and a folder for a file (its usage error, status 2)
+    for args, words in (((*base, "-o", tmp_path / "ok.stl", "--pictures", blocker), "is a file"),
+                        ((*base, "-o", tmp_path), "is a directory"), (("demo", "--out", blocker, "-q"), "is a file")):
+        result = run(*args)
+        assert result.exit_code == 2 and words in result.stderr and "Traceback" not in result.output
+    assert not (tmp_path / "ok.stl").exists() and not (tmp_path / "cache").exists()
+
+
+def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(branch_files, tmp_path,
+                                                                               monkeypatch):
+    import supportless.io as sio
+
+    def full_disk(path, *args, **kwargs):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(sio, "write_pose", full_disk)
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
+                 "--iterations", 1, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
+                 "--report", tmp_path / "report.json")
+    assert result.exit_code == 1, (result.output, result.exception)
+    lines = result.stderr.strip().splitlines()
+    assert lines == [f"supportless: error: {tmp_path / 'pose.json'}: cannot write: No space left on device"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["posed.stl", "report.json"]
+
+
+def test_a_closed_stdout_loses_nothing(branch_files, tmp_path):
+    """``supportless optimize ... | head -1``: the files are written and the exit status is 0."""
+    import subprocess
+
+    out = tmp_path / "posed.stl"
+    proc = subprocess.Popen([str(EXE), "optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"],
+                             "--particles", "4", "--iterations", "2", "-o", str(out), "--report",
+                             str(tmp_path / "r.json")], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.readline()
+    proc.stdout.close()  # as `head -1` does
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+    assert out.stat().st_size > 0 and json.loads((tmp_path / "r.json").read_text())["model"]
