@@ -9,6 +9,10 @@ swarm, as :class:`SearchSettings` say; :mod:`supportless.report` measures and
 draws the result.
 """
 
+from . import numba_cache
+
+numba_cache.configure()  # before numba is imported: a read-only install with no home still runs
+
 from .energies.arap import arap_energy, arap_energy_direct, arap_precompute
 from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
