@@ -639,8 +639,11 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         try:
             _write_cached(file, rig)
             rig.info["cache"] = str(file)
-        except OSError:
+        except OSError as exc:
             rig.info["cache"] = None
+            rig.info.setdefault("warnings", []).append(
+                f"the rig cache {file.parent} cannot be written ({exc.strerror or exc}): the rig is prepared again "
+                f"next time; --cache-dir DIR chooses another folder")
     return rig
 
 

@@ -220,6 +220,15 @@ def test_damaged_cache_entry_is_recomputed(tmp_path):
     assert sl.load_rig("demo:branch", cache_dir=tmp_path).info["from_cache"] is True
 
 
+def test_a_cache_that_cannot_be_written_is_said_once_and_the_rig_still_loads(tmp_path):
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    rig = sl.load_rig("demo:branch", cache_dir=blocker / "cache")
+    assert rig.info["from_cache"] is False and rig.info["cache"] is None
+    said = [w for w in rig.info["warnings"] if "cannot be written" in w]
+    assert len(said) == 1 and str(blocker / "cache") in said[0] and "--cache-dir" in said[0]
+
+
 def test_no_cache_writes_nothing(tmp_path):
     rig = sl.load_rig("demo:branch", cache=False, cache_dir=tmp_path / "c")
     assert rig.info["from_cache"] is False
