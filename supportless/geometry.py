@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["parse_up", "place_on_plate", "print_pose", "print_transform", "signed_volume"]
+__all__ = ["parse_up", "place_on_plate", "points_in_triangles", "print_pose", "print_transform", "signed_volume"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -141,3 +141,27 @@ def print_pose(vertices: np.ndarray, rotation: np.ndarray, up: np.ndarray) -> np
     """
     V = np.asarray(vertices, np.float64)
     return V @ np.asarray(rotation, np.float64).T + print_transform(V, rotation, up)
+
+
+def points_in_triangles(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Whether each planar point lies in a counter-clockwise triangle (or on its edge).
+
+    Parameters
+    ----------
+    V : (n, 2) float64
+    F : (f, 3) int64
+        Counter-clockwise triangles.
+    Q : (q, 2) float64
+
+    Returns
+    -------
+    inside : (q,) bool
+    """
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    inside = np.zeros(len(Q), bool)
+    for k, q in enumerate(Q):
+        def side(u, v):
+            return (v - u)[:, 0] * (q - u)[:, 1] - (v - u)[:, 1] * (q - u)[:, 0]
+        s0, s1, s2 = side(a, b), side(b, c), side(c, a)
+        inside[k] = np.any((s0 >= -1e-12) & (s1 >= -1e-12) & (s2 >= -1e-12))
+    return inside

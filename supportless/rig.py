@@ -27,8 +27,9 @@ import numpy as np
 from . import kinematics as kin
 from .energies.balance import centre_of_mass_operator
 from .errors import InputError
+from .repair import repair_degenerate_faces, repair_note
 from .skeleton import check_skeleton
-from .geometry import parse_up, signed_volume
+from .geometry import parse_up, points_in_triangles, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, compute_weights
@@ -294,12 +295,16 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         V2, J2 = V[:, :2], joints[:, :2]
         if signed_volume(V2, F) < 0:
             F = F[:, ::-1].copy()
-        inside = _inside_planar(V2, F, J2)
+        inside = points_in_triangles(V2, F, J2)
         if not inside.all():
             i = int(np.flatnonzero(~inside)[0])
             raise InputError(skel_path, f"joint {i + 1} at {J2[i].tolist()} lies outside the planar mesh "
                              f"{mesh_path or ''}".rstrip() + "; move it inside")
         return np.ascontiguousarray(V2), F, np.ascontiguousarray(J2), 2, []
+    repaired = []
+    if joints_inside:  # (a skinned model's vertices carry its weights: they stay as they are)
+        V, F, count = repair_degenerate_faces(V, F)
+        repaired = [repair_note(count)] if count else []
     check_closed_surface(V, F, mesh_path)
     if signed_volume(V, F) < 0:
         F = F[:, ::-1].copy()
@@ -309,18 +314,7 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path, np.inf, JOINT_INSIDE_MARGIN)
     else:
         joints, warnings = pull_joints_inside(V, F, joints, bones, up, skel_path)
-    return V, F, joints, 3, warnings
-
-
-def _inside_planar(V: np.ndarray, F: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    inside = np.zeros(len(Q), bool)
-    for k, q in enumerate(Q):
-        def side(u, v):
-            return (v - u)[:, 0] * (q - u)[:, 1] - (v - u)[:, 1] * (q - u)[:, 0]
-        s0, s1, s2 = side(a, b), side(b, c), side(c, a)
-        inside[k] = np.any((s0 >= -1e-12) & (s1 >= -1e-12) & (s2 >= -1e-12))
-    return inside
+    return V, F, joints, 3, repaired + warnings
 
 
 # --------------------------------------------------------------------------- #
@@ -437,7 +431,9 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         W = W[tet_order]
     else:
         say("computing bounded biharmonic weights")
-        W = compute_weights(TV, TT, J, B, bbw_iterations)
+        notes = []
+        W = compute_weights(TV, TT, J, B, bbw_iterations, notes=notes)
+        warnings = list(warnings) + notes
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
             "bbw_iterations": bbw_iterations, "warnings": warnings, "weights": "skin" if skinned else "bbw"}

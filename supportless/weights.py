@@ -12,9 +12,32 @@ __all__ = ["compute_weights"]
 BBW_ITERATIONS = 10
 
 
+def _components(n: int, elements: np.ndarray) -> np.ndarray:
+    """Connected component of each of ``n`` vertices through ``elements`` (k, d+1); (n,) int."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    E = np.asarray(elements, np.int64)
+    rows = np.repeat(E[:, :1], E.shape[1] - 1, axis=1).ravel()
+    cols = E[:, 1:].ravel()
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    return connected_components(graph, directed=False)[1]
+
+
+def _point_segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Distances (n, m) from points ``P`` (n, d) to segments ``A``-``B`` (m, d)."""
+    AB = B - A
+    t = np.clip(np.einsum("nmd,md->nm", P[:, None] - A[None], AB) / np.maximum((AB * AB).sum(1), 1e-300), 0, 1)
+    return np.linalg.norm(P[:, None] - (A[None] + t[..., None] * AB[None]), axis=-1)
+
+
 def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarray, bones: np.ndarray,
-                    iterations: int = BBW_ITERATIONS) -> np.ndarray:
+                    iterations: int = BBW_ITERATIONS, notes: list | None = None) -> np.ndarray:
     """Bounded biharmonic weights of a volume mesh, fixed to 1 on each bone.
+
+    A connected part of the mesh that no bone passes through (a separate
+    base, a loose prop) has nothing to fix its weights: it follows the bone
+    nearest to it rigidly (weight 1), and a line in ``notes`` says so.
 
     Parameters
     ----------
@@ -25,6 +48,8 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
     bones : (m, 2) int64
     iterations : int
         Active-set iterations of ``igl.bbw``.
+    notes : list of str, optional
+        Receives one line per part with no bone.
 
     Returns
     -------
@@ -46,8 +71,27 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
         raise InputError(None, f"cannot fix weights on the bones ({exc})") from None
     if len(bones) == 1:
         return np.ones((len(TV), 1))
-    W = np.asarray(igl.bbw(TV, TT, np.asarray(b, np.int64), np.asarray(bc, np.float64),
-                           partition_unity=True, max_iter=iterations), np.float64)
+    b = np.asarray(b, np.int64)
+    part = _components(len(TV), TT)
+    boned = np.isin(part, part[b])
+    W = np.zeros((len(TV), len(BE)))
+    if boned.all():
+        W[:] = igl.bbw(TV, TT, b, np.asarray(bc, np.float64), partition_unity=True, max_iter=iterations)
+    else:  # solve where bones are; each bone-less part follows its nearest bone
+        keep = np.flatnonzero(boned)
+        index = np.full(len(TV), -1)
+        index[keep] = np.arange(len(keep))
+        sub = TT[boned[TT].all(axis=1)]
+        W[keep] = igl.bbw(np.ascontiguousarray(TV[keep]), np.ascontiguousarray(index[sub]), index[b],
+                          np.asarray(bc, np.float64), partition_unity=True, max_iter=iterations)
+        for label in np.unique(part[~boned]):
+            verts = np.flatnonzero(part == label)
+            nearest = int(np.argmin(_point_segment_distance(TV[verts], C[BE[:, 0]], C[BE[:, 1]]).min(axis=0)))
+            W[verts, nearest] = 1.0
+            if notes is not None and len(np.intersect1d(verts, TT)):
+                centre = np.round(TV[verts].mean(axis=0), 3).tolist()
+                notes.append(f"a part of the model with no bone in it ({len(verts)} vertices around {centre}) "
+                             f"follows bone {nearest + 1}, the nearest; give it a bone to pose it on its own")
     W = np.clip(W, 0.0, 1.0)
     s = W.sum(1, keepdims=True)
     bad = s[:, 0] <= 1e-12

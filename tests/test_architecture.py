@@ -90,7 +90,7 @@ def test_no_module_imports_the_package_front_door():
 LAYERS = [
     {"supportless.errors", "supportless.geometry", "supportless.interrupt", "supportless.terminal",
      "supportless.numba_cache"},
-    {"supportless.skeleton", "supportless.paths"},
+    {"supportless.skeleton", "supportless.paths", "supportless.repair"},
     {"supportless.io", "supportless.gcode", "supportless.profile", "supportless.joints", "supportless.printbody", "supportless.kinematics", "supportless.tetmesh",
      "supportless.gltf", "supportless.shapes", "supportless.weights"},
     {"supportless.rig", "supportless.energies"},

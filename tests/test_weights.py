@@ -35,3 +35,23 @@ def test_one_bone_has_all_the_weight():
     B = np.array([[0, 1]])
     TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone=4)
     np.testing.assert_array_equal(compute_weights(TV, TT, J, B), np.ones((len(TV), 1)))
+
+
+def test_a_part_with_no_bone_follows_the_nearest_bone_and_is_named():
+    """The bar with two bones and a separate cube beyond its second end (issue 18: bbw used to fail)."""
+    bar_V, bar_F = box((0, 0, 0), (4, 1, 1))
+    cube_V, cube_F = box((6, 0, 0), (7, 1, 1))
+    V, F = np.vstack([bar_V, cube_V]), np.vstack([bar_F, cube_F + len(bar_V)])
+    J = np.array([[0.2, 0.5, 0.5], [2.0, 0.5, 0.5], [3.8, 0.5, 0.5]])
+    B = np.array([[0, 1], [1, 2]])
+    TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone=8)
+    notes = []
+    W = compute_weights(TV, TT, J, B, notes=notes)
+    cube = TV[:, 0] > 5.0
+    np.testing.assert_array_equal(W[cube], np.tile([0.0, 1.0], (cube.sum(), 1)))  # bone 2 is the nearest
+    np.testing.assert_allclose(W.sum(1), 1.0, atol=1e-9)
+    assert len(notes) == 1 and "no bone in it" in notes[0] and "follows bone 2" in notes[0]
+    # the bar's weights are those of the bar alone
+    bar_TV, bar_TT = tetrahedralize_with_skeleton(bar_V, bar_F, J, B, samples_per_bone=8)
+    alone = compute_weights(bar_TV, bar_TT, J, B)
+    assert W[~cube][TV[~cube, 0] < 0.01, 0].min() > 0.9 and alone[bar_TV[:, 0] < 0.01, 0].min() > 0.9
