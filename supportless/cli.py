@@ -136,7 +136,7 @@ def _search_options(f):
                           "sometimes worse)."),
         click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
         click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
-        click.option("--seed", default=d.seed, show_default=True, type=int),
+        click.option("--seed", default=d.seed, show_default=True, type=click.IntRange(min=0)),
         click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
                      help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
                           "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),
@@ -196,10 +196,7 @@ def _settings(profile=None, **options):
 
     if options.get("overhang_angle", 0.0) is None:
         options["overhang_angle"] = (profile or _printer_profile(None)).overhang_angle
-    try:
-        return SearchSettings(**options)
-    except ValueError as exc:
-        raise InputError(None, str(exc)) from None
+    return SearchSettings(**options)  # bad values are InputError: one line
 
 
 def _run_search(rig, console, settings, quiet=False):
@@ -221,14 +218,15 @@ def _run_search(rig, console, settings, quiet=False):
                                                        f"· overhang {t['overhang']:.3f} "
                                                        f"· intersect {t['intersection']:.3f}")
 
-        try:  # a bad --fix/--free, or nothing left to move, is reported before the search starts
-            fixed = settings.fixed_bones(rig)
-        except ValueError as exc:
-            raise InputError(None, str(exc)) from None
+        fixed = settings.fixed_bones(rig)  # a bad --fix/--free, or nothing left to move: before the search
+        why = (f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} of {rig.bone_count} rest on the "
+               "build plate or join bones that do)")
         if fixed.all() and settings.orient == "keep":
-            raise InputError(None, f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} rest on the "
-                                   "build plate or join bones that do): free some with --free 2,3 or --free all, "
-                                   "or let the search turn it with --orient free")
+            raise InputError(None, f"{why}: free some with --free 2,3 or --free all, or let the search turn it "
+                                   "with --orient free")
+        if fixed.all():
+            click.echo(f"supportless: note: {why}: the search only turns it (--free 2,3 or --free all to pose it)",
+                       err=True)
         return optimize(rig, settings, callback=callback)
 
 
@@ -370,6 +368,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     console = _console()
     if slice_rank_count > 1:
         _require_slicer("--slice-rank")
+    _check_bones_early(settings, model, skeleton)
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
     if slice_rank_count > 1 and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
@@ -394,6 +393,15 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
         sys.exit(EXIT_INTERRUPTED)
     if slice_check_flag:
         _slice_and_report(rig, result, report, report_path, console, profile=profile)
+
+
+def _check_bones_early(settings, model, skeleton) -> None:
+    """--fix, --free and --limit against a TGF skeleton before the (long) rig preparation."""
+    from .io import read_tgf
+
+    tgf = Path(skeleton) if skeleton else Path(model).with_suffix(".tgf")
+    if tgf.suffix.lower() == ".tgf" and tgf.is_file() and not str(model).startswith("demo:"):
+        settings.check_bones(len(read_tgf(tgf)[1]))
 
 
 def _require_slicer(option: str) -> None:
@@ -587,7 +595,7 @@ def slice_check_cmd(original, posed, up, height_mm, printer_profile, as_json):
               help="Built-in figure.")
 @click.option("--particles", default=60, show_default=True, type=click.IntRange(2, None))
 @click.option("--iterations", default=40, show_default=True, type=click.IntRange(0, None))
-@click.option("--seed", default=0, show_default=True, type=int)
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0))
 @click.option("--quiet", "-q", is_flag=True)
 def demo(out_dir, figure, particles, iterations, seed, quiet):
     """Run the whole pipeline on a built-in figure and write its files."""

@@ -49,6 +49,8 @@ def parse_up(up, dim: int = 3) -> np.ndarray:
                 vec = np.array([float(t) for t in s.replace(",", " ").split()])
             except ValueError:
                 raise InputError(None, f"up direction {up!r} is not x|y|z|-x|-y|-z or three numbers") from None
+            if len(vec) != 3 and not (dim == 2 and len(vec) == 2):
+                raise InputError(None, f"up direction {up!r} has {len(vec)} numbers; give three, e.g. '0,1,0'")
     else:
         vec = np.asarray(up, dtype=float).ravel()
     if vec.shape == (2,):

@@ -610,17 +610,27 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.nd
         angles = np.asarray(data["angles"], dtype=np.float64)
     except (ValueError, KeyError, TypeError) as exc:
         raise InputError(path, f"not a pose file (JSON with 'angles' and 'bones'): {_one_line(exc)}") from None
-    if angles.ndim != 2 or angles.shape[1] != 3 or not np.all(np.isfinite(angles)):
+    if angles.ndim != 2 or angles.shape[1] != 3:
         raise InputError(path, f"'angles' must be a list of [x, y, z] per bone, got shape {angles.shape}")
+    bad = np.flatnonzero(~np.isfinite(angles).all(axis=1))
+    if len(bad):
+        raise InputError(path, f"the angles of bone {bad[0] + 1} are not finite numbers ({len(bad)} such bones)")
     if bones is not None:
         bones = np.asarray(bones)
-        stored = np.asarray(data.get("bones", []))
-        if len(angles) != len(bones) or (stored.size and (stored.shape != bones.shape or np.any(stored != bones))):
-            raise InputError(
-                path,
-                f"pose is for a skeleton with {len(angles)} bones, not this one with {len(bones)} bones; "
-                "use the skeleton the pose was made with",
-            )
+        if len(angles) != len(bones):
+            raise InputError(path, f"pose is for a skeleton with {len(angles)} bones, not this one with "
+                                   f"{len(bones)}; use the skeleton the pose was made with")
+        try:
+            stored = np.asarray(data.get("bones", []), dtype=np.int64)
+        except (TypeError, ValueError):
+            raise InputError(path, "'bones' must be a list of [i, j] joint pairs") from None
+        if stored.size and (stored.shape != bones.shape or np.any(stored != bones)):
+            k = next((i for i in range(min(len(stored), len(bones))) if stored.ndim != 2
+                      or not np.array_equal(stored[i], bones[i])), 0)
+            have = stored[k].tolist() if stored.ndim == 2 and k < len(stored) else stored.tolist()
+            raise InputError(path, f"pose is for another skeleton with as many bones: its bone {k + 1} joins "
+                                   f"joints {have}, this skeleton's {bones[k].tolist()} (0-based); use the "
+                                   f"skeleton the pose was made with")
     return angles
 
 

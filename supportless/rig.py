@@ -613,7 +613,9 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     if W is not None:
         settings["weights"] = hashlib.sha256(W.tobytes()).hexdigest()
     if source is None:
-        key = rig_cache_key(V, F, J, B, np.asarray(parse_up(up), np.float64), **settings)
+        planar = V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(J[:, 2] == 0))
+        key = rig_cache_key(V, F, J, B, np.resize(parse_up(up, 2 if planar else 3), 3) * [1, 1, not planar],
+                            **settings)
         file = (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{key}.npz"
         if cache and (rig := _try_cached(file, name)) is not None:
             return rig

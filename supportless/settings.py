@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import InputError
 from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective
 from .profile import default_profile
 from .rig import Rig
@@ -178,29 +179,39 @@ class SearchSettings:
             items = tuple(t for v in (value or ()) for t in str(v).replace(",", " ").split())
             object.__setattr__(self, name, items)
         if self.overhang_model not in OVERHANG_MODELS:
-            raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {self.overhang_model!r}")
+            raise InputError(None, f"overhang_model must be one of {OVERHANG_MODELS}, not {self.overhang_model!r}")
         if self.preset not in PSO_PRESETS:
-            raise ValueError(f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
+            raise InputError(None, f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
         if self.optimizer not in OPTIMIZER_NAMES:
-            raise ValueError(f"optimizer must be one of {OPTIMIZER_NAMES}, not {self.optimizer!r}")
+            raise InputError(None, f"optimizer must be one of {OPTIMIZER_NAMES}, not {self.optimizer!r}")
         if self.particles < 1 or self.iterations < 0:
-            raise ValueError("particles must be at least 1 and iterations at least 0")
+            raise InputError(None, "particles must be at least 1 and iterations at least 0")
         if self.orient not in ORIENT_MODES:
-            raise ValueError(f"orient must be one of {ORIENT_MODES}, not {self.orient!r}")
+            raise InputError(None, f"orient must be one of {ORIENT_MODES}, not {self.orient!r}")
         if self.orient_seeds < 0:
-            raise ValueError(f"orient_seeds must be at least 0, not {self.orient_seeds}")
+            raise InputError(None, f"orient_seeds must be at least 0, not {self.orient_seeds}")
         if not 0.0 <= self.joint_limit <= 180.0:
-            raise ValueError(f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
+            raise InputError(None, f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
             try:
                 ok = 0.0 <= float(value) <= 180.0
-            except ValueError:
+            except ValueError:  # float() of a bad number
                 ok = False
             if not ok:
-                raise ValueError(f"joint limit {item!r} is not BONE=DEGREES with 0..180 degrees, e.g. 5=15")
+                raise InputError(None, f"joint limit {item!r} is not BONE=DEGREES with 0..180 degrees, e.g. 5=15")
+        for name in ("w_arap", "w_overhang", "w_intersect", "w_prior", "support_floor", "overhang_margin"):
+            value = float(getattr(self, name))
+            if not np.isfinite(value):
+                raise InputError(None, f"{name} (--{name.replace('_', '-')}) must be a finite number, "
+                                       f"not {value}")
+            if value < 0 and name != "overhang_margin":
+                raise InputError(None, f"{name} (--{name.replace('_', '-')}) must be 0 or more, not {value}: "
+                                       f"a negative weight would reward what the term measures (0 leaves it out)")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise InputError(None, f"seed must be a whole number 0 or more, not {self.seed!r}")
         if not 0.0 <= self.overhang_angle <= 90.0:
-            raise ValueError(f"overhang_angle must be within 0..90 degrees, not {self.overhang_angle}")
+            raise InputError(None, f"overhang_angle must be within 0..90 degrees, not {self.overhang_angle}")
 
     @property
     def search_overhang_angle(self) -> float:
@@ -249,6 +260,18 @@ class SearchSettings:
             bone, _, value = item.partition("=")
             out[_bone_index(bone, rig.bone_count, rig.labels)] = float(value)
         return out
+
+    def check_bones(self, bone_count: int, labels: list | None = None) -> None:
+        """Check the bones named in ``fix``, ``free`` and ``limits`` against a skeleton, before a rig exists.
+
+        Raises
+        ------
+        InputError
+            For a bone that is not a bone number 1..``bone_count`` (or a name in ``labels``) or ``"all"``.
+        """
+        for item in (*self.fix, *self.free, *(x.partition("=")[0] for x in self.limits)):
+            if str(item).lower() != "all":
+                _bone_index(item, bone_count, labels)
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
         """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
@@ -316,19 +339,19 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
 
 
 def _bone_index(name, m: int, labels: list | None = None) -> int:
-    """0-based index of a bone given as its 1-based number or (a glTF rig) its name; ValueError otherwise."""
+    """0-based index of a bone given as its 1-based number or (a glTF rig) its name; InputError otherwise."""
     if labels is not None and str(name) in labels:
         return labels.index(str(name))
     if labels is not None and not str(name).strip().isdigit():
         close = [x for x in labels if str(name).lower() in x.lower()][:5]
-        raise ValueError(f"bone {name!r} is not a bone name or number 1..{m}"
+        raise InputError(None, f"bone {name!r} is not a bone name or number 1..{m}"
                          + (f"; did you mean {', '.join(close)}?" if close else ""))
     try:
         b = int(name) - 1
     except ValueError:
-        raise ValueError(f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
+        raise InputError(None, f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
     if not 0 <= b < m:
-        raise ValueError(f"bone {name} is out of range 1..{m}")
+        raise InputError(None, f"bone {name} is out of range 1..{m}")
     return b
 
 

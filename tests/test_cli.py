@@ -287,7 +287,7 @@ def test_apply_rejects_a_pose_for_another_skeleton(branch_files, tmp_path):
     sl.write_pose(tmp_path / "pose.json", np.zeros((len(tpose_bones), 3)), tpose_bones)
     result = run("apply", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--pose",
                  tmp_path / "pose.json", "-o", tmp_path / "posed.stl")
-    assert_user_error(result, "pose.json", "15 bones", "3 bones")
+    assert_user_error(result, "pose.json", "15 bones", "with 3;")
     assert not (tmp_path / "posed.stl").exists()
 
 
@@ -448,3 +448,30 @@ def test_a_closed_stdout_loses_nothing(branch_files, tmp_path):
     assert proc.wait(timeout=300) == 0, err
     assert "Traceback" not in err and "BrokenPipe" not in err, err
     assert out.stat().st_size > 0 and json.loads((tmp_path / "r.json").read_text())["model"]
+
+
+@pytest.mark.parametrize("option, value, words", [
+    ("--w-arap", "nan", "w_arap (--w-arap) must be a finite number"),
+    ("--w-overhang", "inf", "w_overhang (--w-overhang) must be a finite number"),
+    ("--w-intersect", "-1", "w_intersect (--w-intersect) must be 0 or more"),
+    ("--fix", "99", "bone 99 is out of range 1..3"),
+    ("--limit", "7=10", "bone 7 is out of range 1..3"),
+    ("--up", "0,1", "has 2 numbers; give three"),
+])
+def test_bad_options_are_one_line_before_the_rig_is_prepared(branch_files, tmp_path, option, value, words):
+    result = run("optimize", branch_files["mesh"], "--skeleton", branch_files["skeleton"], "--cache-dir",
+                 tmp_path / "cache", "-o", tmp_path / "out.stl", option, value)
+    assert_user_error(result, words)
+    assert not (tmp_path / "cache").exists() and not (tmp_path / "out.stl").exists()
+
+
+def test_a_negative_seed_names_the_option(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "-o", tmp_path / "out.stl", "--seed", "-1")
+    assert result.exit_code == 2 and "'--seed'" in result.stderr and "Traceback" not in result.output
+
+
+def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--fix", "all",
+                 "--particles", 4, "--iterations", 1, "-q", "-o", tmp_path / "out.stl")
+    assert result.exit_code == 0, result.output
+    assert "every bone of" in result.stderr and "the search only turns it" in result.stderr

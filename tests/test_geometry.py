@@ -17,10 +17,13 @@ def test_parse_up(up, expected):
 
 def test_parse_up_2d_and_errors():
     np.testing.assert_array_equal(parse_up("y", dim=2), [0, 1])
-    np.testing.assert_array_equal(parse_up("1,0"), [1, 0, 0])  # two numbers: z = 0
-    for bad in ("w", "0,0,0", "1,nan,0", "1,2,3,4"):
-        with pytest.raises(InputError):
+    np.testing.assert_array_equal(parse_up("1,0", dim=2), [1, 0])  # a planar figure: two numbers
+    np.testing.assert_array_equal(parse_up((1, 0)), [1, 0, 0])  # an array of two: z = 0
+    for bad in ("w", "0,0,0", "1,nan,0", "1,2,3,4", (0, 1, 0, 0)):
+        with pytest.raises(InputError, match="up direction"):
             parse_up(bad)
+    with pytest.raises(InputError, match="has 2 numbers; give three"):  # "0,1" for a 3D model: said
+        parse_up("0,1")
     with pytest.raises(InputError, match="plane"):
         parse_up("z", dim=2)
 

@@ -56,6 +56,15 @@ def test_taken_port_is_a_clear_error_and_default_picks_a_free_one(rig):
             App(rig, port=busy, verbose=False)
 
 
+@pytest.mark.parametrize("host, words", [("no-such-host.invalid", "is not an address"),
+                                         ("192.0.2.1", "is not an address of this machine")])
+def test_a_bad_host_is_said_as_such_not_as_a_taken_port(rig, host, words):
+    # 192.0.2.1 is TEST-NET-1 (RFC 5737): a valid address no machine here has
+    with pytest.raises(InputError, match=words) as info:
+        App(rig, host=host, port=8765, verbose=False)
+    assert "taken" not in str(info.value) and "--host" in str(info.value)
+
+
 def test_page_url():
     from supportless.ui.ports import page_url
 

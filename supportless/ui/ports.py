@@ -6,14 +6,40 @@ must be free, and a taken one is a clear error rather than a silent move.
 
 from __future__ import annotations
 
+import errno
 import socket
 
 from ..errors import InputError
 
-__all__ = ["DEFAULT_PORT", "find_free_port", "page_url", "port_is_free", "port_taken_message", "start_server"]
+__all__ = ["DEFAULT_PORT", "check_host", "find_free_port", "page_url", "port_is_free", "port_taken_message",
+           "start_server"]
 
 #: The first port tried when none is given.
 DEFAULT_PORT = 8080
+
+
+def check_host(host: str) -> None:
+    """Refuse an address this machine cannot listen on, before any port is tried.
+
+    Raises
+    ------
+    InputError
+        For a name that does not resolve, or an address of another machine.
+    """
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise InputError(None, f"--host {host!r} is not an address ({exc}); use 127.0.0.1, or 0.0.0.0 for "
+                               "every interface") from None
+    family, _, _, _, address = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((address[0], 0))
+        except OSError as exc:
+            if exc.errno == errno.EADDRNOTAVAIL:
+                raise InputError(None, f"--host {host!r} is not an address of this machine; use 127.0.0.1, or "
+                                       "0.0.0.0 for every interface") from None
+            raise InputError(None, f"cannot listen on --host {host!r}: {exc.strerror or exc}") from None
 
 
 def port_is_free(host: str, port: int) -> bool:
@@ -100,11 +126,13 @@ def start_server(host: str, port: int | None, label: str, verbose: bool = True):
     Raises
     ------
     InputError
-        When the given port is taken (also when another program takes it
+        When the host is not an address of this machine (:func:`check_host`),
+        or the given port is taken (also when another program takes it
         while the server starts).
     """
     import viser
 
+    check_host(host)
     if port is None:
         port = find_free_port(host, DEFAULT_PORT)
     elif not port_is_free(host, port):
