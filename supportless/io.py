@@ -136,18 +136,39 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     ext = path.suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError(path, f"unknown mesh format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
+    if ext == "obj":
+        _check_obj_vertex_lines(path)
     try:
         loaded = trimesh.load(str(path), file_type=ext, process=False, force="mesh")
     except Exception as exc:  # trimesh raises many types on bad files
         raise InputError(path, f"cannot read as {ext.upper()}: {_one_line(exc)}") from None
     V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
     F = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    if V.ndim != 2 or (len(V) and V.shape[1] != 3):
+        raise InputError(path, f"vertices have {V.shape[-1] if V.ndim == 2 else '?'} coordinates, not x y z")
     if len(V) == 0 or len(F) == 0 or F.ndim != 2 or F.shape[1] != 3:
         raise InputError(path, f"no triangles found in this {ext.upper()} file")
     if not np.all(np.isfinite(V)):
         raise InputError(path, "vertex coordinates contain NaN or infinity")
     V, F = merge_duplicate_vertices(V, F)
     return V, F
+
+
+def _check_obj_vertex_lines(path: Path) -> None:
+    """Every ``v`` line of an OBJ file has three numbers (x y z; a colour may follow), or InputError naming it."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            for lineno, line in enumerate(fh, 1):
+                if line.startswith("v ") or line.startswith("v\t"):
+                    words = line.split()[1:4]
+                    try:
+                        ok = len(words) == 3 and all(np.isfinite(float(w)) for w in words)
+                    except ValueError:
+                        ok = False
+                    if not ok:
+                        raise InputError(path, f"line {lineno} is not a vertex 'v x y z': {line.strip()[:60]!r}")
+    except OSError as exc:
+        raise InputError(path, f"cannot read: {_one_line(exc)}") from None
 
 
 def _one_line(exc: BaseException) -> str:
