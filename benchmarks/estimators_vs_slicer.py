@@ -17,6 +17,10 @@ Three steps, each optional:
     error (rest -> found, every model and profile) smallest; prints the
     values to put in :mod:`supportless.energies.slicer_model` and each
     model's error when it is left out of the fit.
+``--slicer-search``
+    For each model: the default search with ``--overhang-model slicer`` (the
+    slicer model as what the search minimises), sliced, against the default
+    search's result in the samples (the prism estimate with the margin).
 (always) the table
     For each model and profile: PrusaSlicer's reduction rest -> found
     (the search's result) and the predicted one, with the error in points;
@@ -25,6 +29,7 @@ Three steps, each optional:
 
     python benchmarks/estimators_vs_slicer.py --collect [--models ...] [--profile FILE] [--samples FILE]
     python benchmarks/estimators_vs_slicer.py --fit [--samples FILE]
+    python benchmarks/estimators_vs_slicer.py --slicer-search [--models ...]
     python benchmarks/estimators_vs_slicer.py [--samples FILE]
 """
 
@@ -227,6 +232,33 @@ def fit(samples):
     return delta, H, coef
 
 
+def slicer_search(samples, names):
+    """The search minimising the slicer model against the default search, both sliced (default profile)."""
+    angle = overhang_threshold(default_profile())
+    ref = {(r["model"], r["pose"]): r for r in samples.rows if r["profile"] == "default"}
+    print("| model | PrusaSlicer mm rest | default search (prism, margin) | search minimising the slicer model "
+          "| search time (slicer model) |")
+    print("|---|---|---|---|---|")
+    worse = better = 0
+    for name in names:
+        if (name, "found") not in ref or not models.available(name):
+            continue
+        rig = models.load(name)
+        t0 = time.perf_counter()
+        result = sl.optimize(rig, sl.SearchSettings(overhang_angle=angle, overhang_model="slicer"))
+        seconds = time.perf_counter() - t0
+        scale = scale_for_height(rig.vertices, rig.up, 60.0)
+        mm = slice_support([(print_vertices(rig, result.angles, result.rotation), rig.faces)], rig.up, scale,
+                           workers=1).meshes[0]["support_mm"]
+        rest, found = ref[(name, "rest")]["slicer_mm"], ref[(name, "found")]["slicer_mm"]
+        worse += mm > found * 1.01
+        better += mm < found * 0.99
+        print(f"| {name} | {rest:.0f} | {found:.0f} ({_pct(100 * (1 - found / rest))}) "
+              f"| {mm:.0f} ({_pct(100 * (1 - mm / rest))}) | {seconds:.0f} s |", flush=True)
+    print(f"\nMinimising the slicer model needed more support than the default search on {worse} models "
+          f"and less on {better} (1 % either way).")
+
+
 def _pct(x):
     return "–" if x is None else f"{x:.1f} %"
 
@@ -260,6 +292,8 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--collect", action="store_true", help="Slice poses of the models and append the samples.")
     p.add_argument("--fit", action="store_true", help="Refit the slicer model on the samples.")
+    p.add_argument("--slicer-search", action="store_true",
+                   help="Search with the slicer model as the overhang term and slice the results.")
     p.add_argument("--models", nargs="+", default=list(ZOO))
     p.add_argument("--profile", default=None, help="PrusaSlicer config (.ini) to collect with (default: its defaults).")
     p.add_argument("--samples", default=str(DEFAULT_SAMPLES))
@@ -277,6 +311,9 @@ def main(argv=None):
                     collect(name, profile, label, rng, out)
     rows = [json.loads(line) for line in open(args.samples)]
     samples = Samples(rows)
+    if args.slicer_search:
+        slicer_search(samples, args.models)
+        return
     print_table(samples, fit(samples) if args.fit else None)
 
 
