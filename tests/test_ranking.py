@@ -61,6 +61,20 @@ def test_slice_rank_picks_the_cheapest_distinct_pose(branch_rig, searched):
     assert d["chosen_rank"] == ranked.chosen + 1 and len(d["candidates"]) == n
 
 
+def test_slice_rank_with_the_real_slicer_keeps_the_pose_it_measures_cheapest(branch_rig, searched, prusa_slicer):
+    """Integration: PrusaSlicer slices the distinct poses; the chosen one has the least support it measured."""
+    from supportless.slicer import scale_for_height, slice_support
+
+    ranked = slice_rank(branch_rig, searched, 3, tolerance=10.0)
+    support = [e["support_mm"] for e in ranked.entries]
+    assert len(support) >= 2 and all(np.isfinite(x) and x >= 0 for x in support)
+    assert ranked.chosen == int(np.argmin(support))
+    # slicing the chosen pose again gives the figure the ranking recorded (to the slicer's own noise)
+    again = slice_support([(ranked.result.print_vertices, branch_rig.faces)], branch_rig.up,
+                          scale_for_height(branch_rig.vertices, branch_rig.up, 60.0)).support_mm[0]
+    assert again == pytest.approx(support[ranked.chosen], rel=1e-3)
+
+
 def test_slice_rank_keeps_the_search_result_when_the_slicer_agrees(branch_rig, searched):
     first = np.asarray(searched.print_vertices)
 
