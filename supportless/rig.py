@@ -32,7 +32,7 @@ from .skeleton import check_skeleton
 from .geometry import parse_up, points_in_triangles, signed_volume
 from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
-from .weights import BBW_ITERATIONS, compute_weights
+from .weights import BBW_ITERATIONS, check_weights, compute_weights
 
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
@@ -428,7 +428,9 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         if W.shape != (len(TV), len(B)):
             raise InputError(None, f"weights are {W.shape[0]}x{W.shape[1]} but the tet mesh has {len(TV)} "
                              f"vertices and the skeleton {len(B)} bones")
-        W = W[tet_order]
+        notes = []
+        W = check_weights(W[tet_order], notes)
+        warnings = list(warnings) + notes
     else:
         say("computing bounded biharmonic weights")
         notes = []

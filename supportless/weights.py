@@ -6,7 +6,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["compute_weights"]
+__all__ = ["check_weights", "compute_weights"]
 
 #: Active-set iterations of the weight solve.
 BBW_ITERATIONS = 10
@@ -99,3 +99,50 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
         W[bad] = 1.0 / W.shape[1]
         s = W.sum(1, keepdims=True)
     return W / s
+
+
+def check_weights(weights: np.ndarray, notes: list | None = None) -> np.ndarray:
+    """Skinning weights given with the model, checked: finite, not negative, rows summing to 1.
+
+    Parameters
+    ----------
+    weights : (t, m) float64
+        One row per volume vertex, one column per bone.
+    notes : list of str, optional
+        Receives a line when rows had to be scaled to sum to 1.
+
+    Returns
+    -------
+    weights : (t, m) float64
+        Rows summing to 1: rows off by more than 1e-6 scaled, tiny negative
+        round-off clipped to 0, the rest as given.
+
+    Raises
+    ------
+    InputError
+        One line naming the first vertex and bone at fault: a NaN or infinite
+        weight, a negative one, or a vertex with no weight at all.
+    """
+    W = np.asarray(weights, np.float64)
+    bad = np.argwhere(~np.isfinite(W))
+    if len(bad):
+        v, b = bad[0]
+        raise InputError(None, f"the weight of vertex {v} on bone {b + 1} is {W[v, b]}; weights must be numbers "
+                               f"0..1 ({len(bad)} such weights)")
+    bad = np.argwhere(W < -1e-6)
+    if len(bad):
+        v, b = bad[0]
+        raise InputError(None, f"the weight of vertex {v} on bone {b + 1} is {W[v, b]:.4g}; weights must be 0..1 "
+                               f"({len(bad)} negative weights)")
+    W = np.clip(W, 0.0, None)
+    s = W.sum(1)
+    empty = np.flatnonzero(s <= 1e-12)
+    if len(empty):
+        raise InputError(None, f"vertex {empty[0]} has no weight on any bone ({len(empty)} such vertices); every "
+                               f"vertex needs weights summing to 1")
+    off = np.abs(s - 1.0) > 1e-6
+    if off.any():  # (rows within round-off of 1 stay exactly as given)
+        W[off] /= s[off, None]
+        if notes is not None:
+            notes.append(f"{int(off.sum())} rows of the given weights did not sum to 1 and were scaled to 1")
+    return W

@@ -55,3 +55,21 @@ def test_a_part_with_no_bone_follows_the_nearest_bone_and_is_named():
     bar_TV, bar_TT = tetrahedralize_with_skeleton(bar_V, bar_F, J, B, samples_per_bone=8)
     alone = compute_weights(bar_TV, bar_TT, J, B)
     assert W[~cube][TV[~cube, 0] < 0.01, 0].min() > 0.9 and alone[bar_TV[:, 0] < 0.01, 0].min() > 0.9
+
+
+def test_given_weights_are_checked_and_named():
+    import pytest
+
+    from supportless.errors import InputError
+    from supportless.weights import check_weights
+
+    W = np.array([[0.25, 0.75], [1.0, 0.0], [0.5, 0.5]])
+    np.testing.assert_array_equal(check_weights(W), W)  # good rows come back as given
+    notes = []
+    np.testing.assert_allclose(check_weights(W * [[2.0], [1.0], [1.0]], notes), W)
+    assert notes == ["1 rows of the given weights did not sum to 1 and were scaled to 1"]
+    for bad, words in ((np.array([[np.nan, 1.0]]), "vertex 0 on bone 1 is nan"),
+                       (np.array([[1.0, 0.0], [1.5, -0.5]]), "vertex 1 on bone 2 is -0.5"),
+                       (np.array([[0.0, 0.0]]), "vertex 0 has no weight on any bone")):
+        with pytest.raises(InputError, match=words):
+            check_weights(bad)
