@@ -16,6 +16,7 @@ import numpy as np
 
 from .errors import InputError, SupportlessError
 from .interrupt import deferred_interrupt, requested as interrupt_requested
+from .paths import check_output_paths
 from .terminal import ClosableStdout, drop_stdout
 from .shapes import DEMO_FIGURES
 
@@ -230,6 +231,18 @@ def _run_search(rig, console, settings, quiet=False):
         return optimize(rig, settings, callback=callback)
 
 
+def _run_front(rig, console, settings, count, quiet=False):
+    """Search the front of least support against least distortion (see :mod:`supportless.pareto`)."""
+    from .pareto import pareto_front
+
+    settings.fixed_bones(rig)  # a bad --fix/--free: before the searches
+    front = pareto_front(rig, settings, count, callback=None if quiet else lambda *a: console.print(
+        f"  front: search {a[0]} of {a[1]} took {a[2].runtime_seconds:.1f} s"))
+    for line in [] if quiet else front.summary():
+        console.print(f"  {line}")
+    return front
+
+
 def _summary_table(report: dict):
     from rich.table import Table
 
@@ -316,18 +329,6 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, upr
     return written, failed
 
 
-def _list_written(console, written) -> None:
-    for label, path in written:
-        console.print(f"  {label}: {path}")
-
-
-def _check_outputs(files=(), folders=(), inputs=()) -> None:
-    """Every output location writable and none an input, before any work (one line and exit 2 otherwise)."""
-    from .paths import check_output_paths
-
-    check_output_paths(files, folders, inputs)
-
-
 def _inputs(model, skeleton=None, tets=None, weights=None, *more):
     """The files a command reads: MODEL, its skeleton (given or MODEL.tgf), tets, weights and ``more``."""
     default_skeleton = Path(model).with_suffix(".tgf") if model and not str(model).startswith("demo:") else None
@@ -352,17 +353,28 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=1), default=1, show_default=True,
               help="Slice up to K distinct good poses the search found (its best among them) with PrusaSlicer, "
                    "two at a time, and keep the one with the least support (needs prusa-slicer).")
+@click.option("--pareto", "pareto_count", type=click.IntRange(min=2), default=None,
+              help="Also return up to N poses along the front of least support against least distortion: "
+                   "OUT-1 .. OUT-N (least support first), their poses and OUT-front.png.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, output, upright_out, report_path, pose,
-             pictures, slice_check_flag, slice_rank_count, quiet, **search_options):
+             pictures, slice_check_flag, slice_rank_count, pareto_count, quiet, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
 
     for path in (output, upright_out):
         _check_mesh_path(path)
     profile_path = search_options.pop("printer_profile")
-    _check_outputs([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose)],
-                   [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
+    front_files = []
+    if pareto_count:
+        from .pareto import front_paths
+
+        if slice_rank_count > 1:
+            _fail("--pareto and --slice-rank do not go together; choose one")
+        meshes, poses, gallery = front_paths(output, pareto_count)
+        front_files = [("--pareto", f) for f in (*meshes, *poses, gallery)]
+    check_output_paths([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose),
+                    *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
     profile = _printer_profile(profile_path)
     settings = _settings(profile, **search_options)
     console = _console()
@@ -373,7 +385,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     if slice_rank_count > 1 and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     with deferred_interrupt():  # Ctrl-C stops the search; what it found is still written
-        result = _run_search(rig, console, settings, quiet)
+        front = _run_front(rig, console, settings, pareto_count, quiet) if pareto_count else None
+        result = front.default if front else _run_search(rig, console, settings, quiet)
         if result.interrupted:
             console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
         extra = {"printer_profile": profile.summary()}
@@ -381,11 +394,18 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
             ranked = _slice_rank(rig, result, slice_rank_count, console, profile)
             if ranked is not None:
                 result, extra["slice_rank"] = ranked.result, ranked.to_dict()
+        if front is not None:
+            from .pareto import write_front
+
+            extra["pareto"], front_written = write_front(rig, front, output)
+            extra["pareto_seconds"] = front.seconds
         report = build_report(rig, result) | extra
         written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures,
                                          upright=upright_out)
+        if front is not None:
+            written += front_written
     _print_results(console, report)  # after the files: a closed stdout (| head) loses nothing
-    _list_written(console, written)
+    console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
     if result.interrupted or interrupt_requested():
@@ -495,7 +515,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, po
 
     for path in (output, upright_out):
         _check_mesh_path(path)
-    _check_outputs([("-o", output), ("--upright-out", upright_out)], (), _inputs(model, skeleton, tets, weights, pose))
+    check_output_paths([("-o", output), ("--upright-out", upright_out)], (), _inputs(model, skeleton, tets, weights, pose))
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     angles = read_pose(pose, rig.bones)
     R = read_print_rotation(pose, rig.dim)
@@ -606,7 +626,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     from .rig import load_rig
 
     settings = _settings(particles=particles, iterations=iterations, seed=seed)
-    _check_outputs((), [("--out", out_dir)])
+    check_output_paths((), [("--out", out_dir)])
     console = _console()
     out = Path(out_dir)
     t0 = time.perf_counter()
@@ -630,7 +650,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     _print_results(console, report)
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
-    _list_written(console, written)
+    console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
     if rig.dim == 3:  # the slicer's figures when PrusaSlicer is there; the demo runs without it

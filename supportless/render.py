@@ -640,3 +640,49 @@ def plot_convergence(path, history, terms=None, title=None, size=(800, 500)):
     fig.suptitle(title or "convergence")
     fig.tight_layout()
     return _save_atomic(fig, path)
+
+
+def render_front(path, meshes, up, support, distortion, support_label="support", size=None):
+    """Write one PNG of a front of poses: a thumbnail of each, and the front plotted.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output PNG path; written atomically.
+    meshes : list of tuple
+        ``(V, F)`` per pose, ``V`` (n, d) float64 in its print frame, ``F`` (f, 3) int64.
+    up : array_like, shape (d,)
+        Printing direction, shown vertically.
+    support, distortion : array_like, shape (k,), float64
+        Each pose's two measures (numbered 1..k in both panels).
+    support_label : str
+        The support axis' label.
+    size : tuple of int, optional
+        ``(width, height)`` in pixels; default 300 px per thumbnail by 700.
+
+    Returns
+    -------
+    str
+        The path written.
+    """
+    k = len(meshes)
+    if k == 0:
+        raise ValueError("no poses to draw")
+    size = size or (max(900, 300 * k), 760)
+    bounds = view_bounds(*[np.asarray(V, np.float64) for V, _ in meshes])
+    fig = _new_figure(size)
+    thumb_h = 0.52
+    aspect = (size[0] / k) / (size[1] * thumb_h * 0.93)
+    for i, (V, F) in enumerate(meshes):
+        ax = _panel_axes(fig, (i / k, 1.0 - thumb_h, 1.0 / k, thumb_h), True)
+        title = f"{i + 1}: {support[i]:.4g} / {distortion[i] if distortion[i] > 1e-9 else 0:.3g}"
+        _draw_mesh(ax, V, F, up, None, None, None, None, title, None, bounds, aspect)
+    ax = fig.add_axes((0.08, 0.08, 0.88, 0.34))
+    s, d = np.asarray(support, np.float64), np.asarray(distortion, np.float64)
+    ax.plot(s, d, "-o", color="tab:blue")
+    for i in range(k):
+        ax.annotate(str(i + 1), (s[i], d[i]), textcoords="offset points", xytext=(6, 6))
+    ax.set_xlabel(support_label)
+    ax.set_ylabel("distortion")
+    ax.grid(True, alpha=0.3)
+    return _save_atomic(fig, path)

@@ -100,7 +100,7 @@ LAYERS = [
     {"supportless.search"},
     {"supportless.render", "supportless.report"},
     {"supportless.slicer", "supportless.bench"},
-    {"supportless.ranking"},
+    {"supportless.ranking", "supportless.pareto"},
     {"supportless.cli", "supportless.ui"},
 ]
 

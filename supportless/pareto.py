@@ -1,0 +1,314 @@
+"""A front of poses from least support to least distortion, instead of one weighted guess.
+
+The weights of distortion and support are a trade-off with no right value: a
+print farm wants the least plastic, an artist the pose barely touched.
+:func:`pareto_front` sweeps the weight of the distortion terms (ARAP and the
+natural-pose prior) over :data:`SPAN` ``** [-1, 1]`` times its default with
+the support weight fixed, one search per weight, each started from its
+neighbour's pose (and print turn): the default weight's search first with the
+full iterations, then outwards with ``2 / (N - 1)`` of them each, so the
+whole front costs about three single searches. Every search keeps the hard
+rules (joint limits, standing, no self-intersection), so every pose of the
+front does.
+
+The searches' results and their other good positions (the particles' bests,
+:data:`CANDIDATES_PER_SEARCH` each) make a pool, each pose measured with one
+yardstick: *support* as the slicer model predicts PrusaSlicer's filament
+(mm, 60 mm tall; the prism estimate for planar figures) and *distortion* as
+the default objective's distortion part (``w_arap * arap + w_prior * prior``
+at the default weights). Poses that break a rule, poses another pose beats
+on both measures, and near-copies (every joint and the turn within
+:data:`SAME_DEGREES`) are dropped; of the rest, the front's two ends and the
+poses farthest from those already chosen are returned, least support first.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .energies.exact import self_intersects
+from .energies.slicer_model import predicted_support_mm
+from .geometry import place_on_plate, print_pose
+from .report import PREDICTION_HEIGHT_MM
+from .rig import Rig
+from .search import PoseResult, measured_at, optimize, pose_distance_deg
+from .settings import SearchSettings
+
+__all__ = ["CANDIDATES_PER_SEARCH", "SAME_DEGREES", "SPAN", "Front", "FrontPose", "front_paths", "non_dominated", "pareto_front",
+           "spread", "sweep_factors", "write_front"]
+
+#: The distortion weights are swept from 1/SPAN to SPAN times the default.
+SPAN = 4.0
+
+#: How many of each search's other good positions join the pool the front is chosen from.
+CANDIDATES_PER_SEARCH = 60
+
+#: Two poses of the front closer than this (every joint and the print turn, degrees) are one pose.
+SAME_DEGREES = 1.0
+
+
+@dataclass
+class FrontPose:
+    """One pose of the front.
+
+    Attributes
+    ----------
+    result : PoseResult
+        The search's result (its settings carry the swept weights).
+    factor : float
+        The distortion weights' factor over the default.
+    support : float
+        Predicted PrusaSlicer support filament, mm at 60 mm tall (3D), or the
+        normalised prism estimate (planar figures; 1 = the rest pose).
+    distortion : float
+        ``w_arap * arap + w_prior * prior`` at the default weights.
+    """
+
+    result: PoseResult
+    factor: float
+    support: float
+    distortion: float
+
+    def to_dict(self) -> dict:
+        """JSON-ready: ``support``, ``distortion``, ``factor``, ``objective`` and the swept weights."""
+        s = self.result.settings
+        return {"support": float(self.support), "distortion": float(self.distortion), "factor": float(self.factor),
+                "w_arap": float(s.w_arap), "w_prior": float(s.w_prior), "objective": float(self.result.value)}
+
+
+@dataclass
+class Front:
+    """What :func:`pareto_front` returns.
+
+    Attributes
+    ----------
+    poses : list of FrontPose
+        Least support first.
+    default : PoseResult
+        The search at the settings' own weights (the sweep's middle): what a
+        single search would have returned.
+    seconds : float
+        Wall time of the whole front.
+    """
+
+    poses: list
+    default: PoseResult
+    seconds: float
+
+    def summary(self) -> list[str]:
+        """One line per pose and one for the time."""
+        return [f"front pose {k}: support {p.support:.4g}, distortion {p.distortion:.3g}"
+                for k, p in enumerate(self.poses, 1)] + [f"the front took {self.seconds:.1f} s ({len(self.poses)} poses)"]
+
+
+def sweep_factors(count: int) -> np.ndarray:
+    """The distortion weights' factors, ``SPAN ** linspace(-1, 1, count)`` with the one nearest 1 set to 1.
+
+    So the default weights are always searched (the middle for an odd
+    ``count``). Returns (count,) float64.
+    """
+    if count < 1:
+        raise ValueError(f"a front needs at least one pose, not {count}")
+    f = SPAN ** np.linspace(-1.0, 1.0, count)
+    f[int(np.argmin(np.abs(np.log(f))))] = 1.0
+    return f
+
+
+def non_dominated(support: np.ndarray, distortion: np.ndarray) -> np.ndarray:
+    """Which points no other point beats on both measures (ties on both keep the first).
+
+    Parameters
+    ----------
+    support, distortion : (n,) float64
+
+    Returns
+    -------
+    keep : (n,) bool
+    """
+    s, d = np.asarray(support, float), np.asarray(distortion, float)
+    keep = np.ones(len(s), bool)
+    for i in range(len(s)):
+        no_worse = (s <= s[i]) & (d <= d[i])
+        better = no_worse & ((s < s[i]) | (d < d[i]))
+        same = no_worse & (s == s[i]) & (d == d[i])
+        if better.any() or same[:i].any():
+            keep[i] = False
+    return keep
+
+
+def spread(points: np.ndarray, count: int) -> list[int]:
+    """Up to ``count`` indices spread along a front: both ends, then farthest-point picks.
+
+    Parameters
+    ----------
+    points : (n, 2) float64
+        ``(support, distortion)``, least support first; each axis is scaled to
+        0..1 before distances are taken.
+    count : int
+
+    Returns
+    -------
+    chosen : list of int
+        Sorted (least support first).
+    """
+    P = np.asarray(points, float)
+    if len(P) <= count:
+        return list(range(len(P)))
+    span = np.ptp(P, axis=0)
+    Q = (P - P.min(axis=0)) / np.where(span > 0, span, 1.0)
+    chosen = [0, len(P) - 1][:count]
+    while len(chosen) < count:
+        d = np.min(np.linalg.norm(Q[:, None] - Q[chosen][None], axis=-1), axis=1)
+        chosen.append(int(np.argmax(d)))
+    return sorted(chosen)
+
+
+def _pool(results: list[tuple[float, PoseResult]], per_search: int):
+    """Every search's result and its best other positions: (angles (q, m, 3), rotations (q, d, d), factor (q,))."""
+    A, R, f = [], [], []
+    for factor, r in results:
+        A.append(r.angles[None])
+        R.append(r.rotation[None])
+        f.append(factor)
+        c = r.candidates
+        if c and len(c["angles"]):
+            A.append(c["angles"][:per_search])
+            R.append(c["rotations"][:per_search])
+            f += [factor] * len(c["angles"][:per_search])
+    return np.concatenate(A), np.concatenate(R), np.array(f)
+
+
+def _measure(rig: Rig, objective, angles: np.ndarray, rotations: np.ndarray, base: SearchSettings):
+    """Support and distortion of poses (see the module's description), and whether they keep the rules.
+
+    Returns ``support (q,)``, ``distortion (q,)``, ``ok (q,) bool``.
+    """
+    turned = not np.allclose(rotations, np.eye(rig.dim))
+    terms = objective.terms(angles, rotations if turned else None)
+    distortion = base.w_arap * terms["arap"] + base.w_prior * terms["prior"]
+    ok = (terms["violation"] <= 0) & (terms["intersection"] <= 0)
+    support = np.asarray(terms["overhang"], float)
+    if rig.dim == 3:
+        up = np.asarray(rig.up, float)
+        height = float(np.ptp(rig.vertices @ up))
+        V = np.stack([print_pose(place_on_plate(rig.pose(a), up), r, up) for a, r in zip(angles, rotations)])
+        support = predicted_support_mm(V, rig.faces, up, base.overhang_angle, PREDICTION_HEIGHT_MM / height)
+    return np.asarray(support, float), np.asarray(distortion, float), ok
+
+
+def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 5,
+                 callback: Callable[[int, int, PoseResult], None] | None = None,
+                 per_search: int = CANDIDATES_PER_SEARCH) -> Front:
+    """Poses along the front of least support against least distortion.
+
+    Parameters
+    ----------
+    rig : Rig
+    settings : SearchSettings, optional
+        The single search's settings (default: the tool's defaults); its
+        distortion weights are the sweep's middle.
+    count : int
+        How many searches, and at most how many poses come back.
+    callback : callable, optional
+        ``callback(done, count, result)`` after each search.
+    per_search : int
+        How many of each search's other good positions (its particles' bests)
+        join the pool the front is chosen from, besides its result.
+
+    Returns
+    -------
+    front : Front
+        Its ``poses`` least support first, spread along the front (its two
+        ends, then the poses farthest from those chosen); no pose is beaten
+        on both measures by another, none self-intersects, and no two are
+        near-copies. Stops early (fewer searches) on Ctrl-C.
+    """
+    t0 = time.perf_counter()
+    base = settings or SearchSettings()
+    factors = sweep_factors(count)
+    middle = int(np.argmin(np.abs(np.log(factors))))
+    short = max(1, int(round(base.iterations * 2 / (count - 1)))) if count > 1 else base.iterations
+    # the middle first, then outwards, each search started from its inner neighbour's pose
+    order = [middle] + [i for k in range(1, count) for i in (middle - k, middle + k) if 0 <= i < count]
+    found: dict[int, PoseResult] = {}
+    for done, i in enumerate(order, 1):
+        start = found.get(i + 1 if i < middle else i - 1)
+        f = float(factors[i])
+        run = base.replace(w_arap=base.w_arap * f, w_prior=base.w_prior * f,
+                           iterations=base.iterations if i == middle else short)
+        found[i] = optimize(rig, run, start=None if start is None else start.angles,
+                            start_rotation=None if start is None or base.orient != "free" else start.rotation)
+        if callback is not None:
+            callback(done, count, found[i])
+        if found[i].interrupted:
+            break
+    objective = base.objective(rig)
+    A, R, F = _pool([(float(factors[i]), found[i]) for i in sorted(found)], per_search)
+    support, distortion, ok = _measure(rig, objective, A, R, base)
+    idx = np.flatnonzero(ok)
+    idx = idx[non_dominated(support[idx], distortion[idx])]
+    idx = idx[np.lexsort((distortion[idx], support[idx]))]
+    distinct: list[int] = []
+    for k in idx:
+        if all(pose_distance_deg(A[k], R[k], A[j], R[j]) >= SAME_DEGREES for j in distinct):
+            distinct.append(int(k))
+    front: list[FrontPose] = []
+    while distinct and len(front) < count:
+        pick = [distinct[j] for j in spread(np.column_stack([support[distinct], distortion[distinct]]), count)]
+        front = []
+        for k in pick:
+            if rig.dim == 3 and self_intersects(rig.pose(A[k]), rig.faces):
+                distinct.remove(k)  # the exact check: drop it and choose again
+                break
+            source = min(found.values(), key=lambda r: abs(np.log(r.settings.w_arap / base.w_arap / F[k])))
+            front.append(FrontPose(measured_at(rig, source, A[k], R[k], objective), float(F[k]),
+                                   float(support[k]), float(distortion[k])))
+        else:
+            break
+    return Front(front, found[middle], time.perf_counter() - t0)
+
+
+def front_paths(output: str | os.PathLike, count: int) -> tuple[list[Path], list[Path], Path]:
+    """Where the front of ``-o OUT.ext`` goes: ``OUT-k.ext`` meshes, ``OUT-k.pose.json`` poses, ``OUT-front.png``."""
+    out = Path(output)
+    stem = out.with_suffix("")
+    meshes = [Path(f"{stem}-{k}{out.suffix}") for k in range(1, count + 1)]
+    poses = [Path(f"{stem}-{k}.pose.json") for k in range(1, count + 1)]
+    return meshes, poses, Path(f"{stem}-front.png")
+
+
+def write_front(rig: Rig, front: Front, output: str | os.PathLike) -> tuple[list[dict], list[tuple[str, str]]]:
+    """Write the front's meshes (print orientation), poses and gallery beside ``output``.
+
+    Returns
+    -------
+    entries : list of dict
+        Per pose (least support first): ``support``, ``distortion``,
+        ``factor``, ``objective``, the swept weights, ``mesh`` and ``pose`` paths.
+    written : list of (str, str)
+        ``(label, path)`` of each file.
+    """
+    from .io import write_mesh, write_pose
+    from .render import render_front
+
+    meshes, poses, gallery = front_paths(output, len(front.poses))
+    entries, written = [], []
+    for p, mesh, pose in zip(front.poses, meshes, poses):
+        r = p.result
+        write_mesh(mesh, r.print_vertices, rig.faces)
+        write_pose(pose, r.angles, rig.bones, rig.joints, rotation=r.rotation,
+                   extra={"objective": r.value, "support": p.support, "distortion": p.distortion})
+        entries.append(p.to_dict() | {"mesh": str(mesh), "pose": str(pose)})
+        written += [(f"front pose {len(entries)} mesh", str(mesh)), (f"front pose {len(entries)} pose", str(pose))]
+    if front.poses:
+        label = "predicted PrusaSlicer support, mm (60 mm tall)" if rig.dim == 3 else "support (prism, rest = 1)"
+        render_front(gallery, [(p.result.print_vertices, rig.faces) for p in front.poses], rig.up,
+                     [p.support for p in front.poses], [p.distortion for p in front.poses], label)
+        written.append(("front gallery", str(gallery)))
+    return entries, written
