@@ -204,7 +204,7 @@ def _measure(rig: Rig, objective, angles: np.ndarray, rotations: np.ndarray, bas
 
 def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 5,
                  callback: Callable[[int, int, PoseResult], None] | None = None,
-                 per_search: int = CANDIDATES_PER_SEARCH) -> Front:
+                 per_search: int = CANDIDATES_PER_SEARCH, stop: Callable[[], bool] | None = None) -> Front:
     """Poses along the front of least support against least distortion.
 
     Parameters
@@ -220,6 +220,9 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     per_search : int
         How many of each search's other good positions (its particles' bests)
         join the pool the front is chosen from, besides its result.
+    stop : callable, optional
+        ``stop() -> bool``, asked after each iteration: True ends the search
+        under way and the sweep (a stop button).
 
     Returns
     -------
@@ -243,7 +246,8 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
         run = base.replace(w_arap=base.w_arap * f, w_prior=base.w_prior * f,
                            iterations=base.iterations if i == middle else short)
         found[i] = optimize(rig, run, start=None if start is None else start.angles,
-                            start_rotation=None if start is None or base.orient != "free" else start.rotation)
+                            start_rotation=None if start is None or base.orient != "free" else start.rotation,
+                            callback=None if stop is None else lambda *_: False if stop() else None)
         if callback is not None:
             callback(done, count, found[i])
         if found[i].interrupted:

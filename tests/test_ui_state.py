@@ -449,3 +449,35 @@ def test_pose_files_keep_the_print_rotation(state, branch_rig, tmp_path):
     with pytest.raises(SupportlessError, match="print_rotation"):
         state.load_pose("broken.json")
     assert np.allclose(state.get_rotation(), R)
+
+
+# ------------------------------------------------------------------ the front (issue 16)
+
+
+def test_the_front_slider_sets_the_pose_and_rotation(tpose_rig, tmp_path):
+    """Headless: find a front in the background, then each slider position shows its pose (an undo step each)."""
+    from supportless.ui.front import FrontBrowser
+
+    state = EditorState(tpose_rig, settings=SearchSettings(particles=24, iterations=8, seed=3), workdir=tmp_path)
+    seen = _events(state)
+    browser = FrontBrowser(state)
+    with pytest.raises(ValueError, match="no front yet"):
+        browser.show(0)
+    assert browser.start(3)
+    assert not browser.start(3)  # one at a time
+    assert browser.wait(300)
+    done = [info for event, info in seen if event == "front_done"]
+    assert len(done) == 1 and "error" not in done[0]
+    front = done[0]["front"]
+    assert front is browser.front and 1 <= len(front.poses) <= 3
+    for k, pose in enumerate(front.poses):
+        measures = browser.show(k)
+        np.testing.assert_array_equal(state.get_angles(), pose.result.angles)
+        np.testing.assert_array_equal(state.get_rotation(), pose.result.rotation)
+        assert browser.shown == k and measures["support"] == pose.support
+    assert seen[-1][0] == "pose" and seen[-1][1]["origin"] == "front"
+    state.undo()
+    if len(front.poses) > 1:  # one undo step back to the previous front pose
+        np.testing.assert_array_equal(state.get_angles(), front.poses[-2].result.angles)
+    with pytest.raises(ValueError, match="not within"):
+        browser.show(len(front.poses))

@@ -31,6 +31,7 @@ import numpy as np
 from ..errors import SupportlessError
 from ..orientation import rotation_axis_angle
 from ..settings import SearchSettings
+from .front import FrontBrowser
 from .panel import Panel, measures_markdown
 from .ports import page_url, start_server
 from .scene import Scene
@@ -99,6 +100,7 @@ class App:
         self.port = int(self.server.get_port())
         self.url = page_url(host, self.port)
         self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo)
+        self.front = FrontBrowser(self.state)
         self.panel = Panel(self.server.gui, self)
         self.state.subscribe(self._on_state)
         self._on_state("settings")
@@ -266,8 +268,37 @@ class App:
             self.state.set_bone_rotation(self.state.selected, rotation)
 
     # ============================================================ state -> page
-    def _on_state(self, event: str, origin: str | None = None, result=None, error=None) -> None:
+    def start_front(self, count: int = 5) -> bool:
+        """Find the front of least support against least distortion in the background (the Front folder)."""
+        try:
+            started = self.front.start(count)
+        except (SupportlessError, ValueError) as exc:
+            self._error(f"cannot find the front: {exc}")
+            return False
+        if started:
+            self.panel.find_front.disabled = True
+            self._set_status(f"finding a front of up to {count} poses (about three searches) ...")
+        return started
+
+    def show_front_pose(self, index: int) -> None:
+        """Show pose ``index`` (0-based) of the front."""
+        try:
+            m = self.front.show(index)
+        except ValueError as exc:
+            self._error(str(exc))
+            return
+        self._set_status(f"front pose {index + 1}: support {m['support']:.4g}, distortion {m['distortion']:.3g}")
+
+    def _on_state(self, event: str, origin: str | None = None, result=None, error=None, front=None) -> None:
         state = self.state
+        if event == "front_done":
+            if error is not None:
+                self.panel.find_front.disabled = False
+                self._error(f"the front search failed: {error}")
+            else:
+                self.panel.show_front(front)
+                self._set_status(f"front found: {len(front.poses)} poses; move 'Front pose' to see them")
+            return
         if event in ("pose", "selection") and origin != "slider":
             b = state.selected
             self.panel.select(b, np.degrees(state.get_angles()[b]))
@@ -376,10 +407,12 @@ class App:
     def stop(self) -> None:
         """Cancel any search, stop drawing and close the server."""
         self.state.cancel_optimize()
+        self.front.cancel()
         with self._cond:
             self._stopping = True
             self._cond.notify_all()
         self.state.wait_optimize(30)
+        self.front.wait(30)
         self._worker.join(5)
         self.server.stop()
 

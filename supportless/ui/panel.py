@@ -130,6 +130,7 @@ class Panel:
             self.measures = gui.add_markdown("computing…")
         self._add_pose_folder()
         self._add_search_folder(app.state.settings)
+        self._add_front_folder()
         self._add_files_folder()
 
     # ----------------------------------------------------------------- build
@@ -204,6 +205,28 @@ class Panel:
             h.on_update(self._setting_edited(name))
         self.optimize.on_click(lambda _e: app.start_optimize())
         self.cancel.on_click(lambda _e: app.state.cancel_optimize())
+
+    def _add_front_folder(self) -> None:
+        g, app = self.gui, self.app
+        with g.add_folder("Front", expand_by_default=False):
+            self.front_count = g.add_slider("Poses", min=2, max=9, step=1, initial_value=5)
+            self.find_front = g.add_button("Find front",
+                                           hint="Poses from least support to least distortion (about 3 searches)")
+            self.front_pose = g.add_slider("Front pose", min=1, max=2, step=1, initial_value=1, disabled=True)
+            self.front_info = g.add_markdown("no front yet")
+        self.find_front.on_click(lambda _e: app.start_front(int(self.front_count.value)))
+        self.front_pose.on_update(lambda e: app.show_front_pose(int(self.front_pose.value) - 1)
+                                  if e.client is not None else None)
+
+    def show_front(self, front) -> None:
+        """The slider over the front's poses, and their measures."""
+        n = len(front.poses)
+        self.find_front.disabled = False
+        self.front_pose.max = max(n, 2)
+        self.front_pose.disabled = n == 0
+        self.front_info.content = "\n".join(
+            [f"{n} poses, least support first ({front.seconds:.0f} s):"]
+            + [f"- {k}: support {p.support:.4g}, distortion {p.distortion:.3g}" for k, p in enumerate(front.poses, 1)])
 
     def _setting_edited(self, name: str):
         def on_update(event):
