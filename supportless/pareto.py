@@ -6,8 +6,8 @@ print farm wants the least plastic, an artist the pose barely touched.
 natural-pose prior) over :data:`SPAN` ``** [-1, 1]`` times its default with
 the support weight fixed, one search per weight, each started from its
 neighbour's pose (and print turn): the default weight's search first with the
-full iterations, then outwards with ``2 / (N - 1)`` of them each, so the
-whole front costs about three single searches. Every search keeps the hard
+full iterations, then outwards with ``SHORT_SHARE / (N - 1)`` of them each, so
+the whole front costs about two and a half single searches. Every search keeps the hard
 rules (joint limits, standing, no self-intersection), so every pose of the
 front does.
 
@@ -40,11 +40,15 @@ from .rig import Rig
 from .search import PoseResult, measured_at, optimize, pose_distance_deg
 from .settings import SearchSettings
 
-__all__ = ["CANDIDATES_PER_SEARCH", "SAME_DEGREES", "SPAN", "Front", "FrontPose", "front_paths", "non_dominated", "pareto_front",
+__all__ = ["CANDIDATES_PER_SEARCH", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose", "front_paths", "non_dominated", "pareto_front",
            "spread", "sweep_factors", "write_front"]
 
 #: The distortion weights are swept from 1/SPAN to SPAN times the default.
 SPAN = 4.0
+
+#: The searches beside the default weights' share this many times its iterations (they start from a
+#: neighbour's pose): with the default's own, the front costs about 1 + SHORT_SHARE single searches.
+SHORT_SHARE = 1.5
 
 #: How many of each search's other good positions join the pool the front is chosen from.
 CANDIDATES_PER_SEARCH = 60
@@ -236,7 +240,7 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     base = settings or SearchSettings()
     factors = sweep_factors(count)
     middle = int(np.argmin(np.abs(np.log(factors))))
-    short = max(1, int(round(base.iterations * 2 / (count - 1)))) if count > 1 else base.iterations
+    short = max(1, int(round(base.iterations * SHORT_SHARE / (count - 1)))) if count > 1 else base.iterations
     # the middle first, then outwards, each search started from its inner neighbour's pose
     order = [middle] + [i for k in range(1, count) for i in (middle - k, middle + k) if 0 <= i < count]
     found: dict[int, PoseResult] = {}
