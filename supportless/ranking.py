@@ -13,7 +13,6 @@ always one of them, so the choice is never worse by the slicer's measure.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -21,7 +20,6 @@ from typing import Callable
 import numpy as np
 
 from .energies.exact import self_intersects
-from .geometry import place_on_plate, print_pose
 from .profile import PrinterProfile
 from .rig import Rig
 from .search import (CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at,

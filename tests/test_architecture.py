@@ -100,7 +100,9 @@ LAYERS = [
     {"supportless.search"},
     {"supportless.render", "supportless.report"},
     {"supportless.slicer", "supportless.bench"},
-    {"supportless.ranking", "supportless.pareto"},
+    {"supportless.ranking", "supportless.pareto", "supportless.batch"},
+    {"supportless.cli_common"},
+    {"supportless.cli_batch"},
     {"supportless.cli", "supportless.ui"},
 ]
 

@@ -1,0 +1,299 @@
+"""A whole folder of models at once, on Dask: one task per model, resumable, one failure never stops the rest.
+
+:func:`find_models` pairs the models of a folder (``X.glb``/``X.gltf``, or a
+mesh ``X.obj``/``.stl``/... with its skeleton ``X.tgf``). :func:`run_model`
+is the task a Dask worker runs for one model: it prepares the rig (through
+the shared on-disk cache), searches, and writes ``OUT/X/`` -- the mesh to
+print ``X.stl``, the pose ``X.pose.json``, ``report.json``, the pictures and
+``row.json`` -- into a temporary folder first and renames it into place, so a
+folder ``OUT/X`` exists only when complete. :func:`run_batch` submits the
+tasks to a ``LocalCluster`` (one single-threaded worker per core, numba's
+threads set to one so workers do not oversubscribe the cores) or to an
+existing scheduler, skips models whose folder is complete (unless
+``force``), and writes ``OUT/summary.csv`` after every finished model and a
+contact sheet at the end.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .errors import InputError, SupportlessError
+from .io import MESH_FORMATS, atomic_path, write_json
+
+__all__ = ["COLUMNS", "ModelSpec", "find_models", "finished_row", "run_batch", "run_model", "write_contact_sheet",
+           "write_summary"]
+
+#: The columns of ``summary.csv``.
+COLUMNS = ("model", "status", "reason", "predicted_before_mm", "predicted_after_mm", "predicted_reduction",
+           "slicer_before_mm", "slicer_after_mm", "slicer_reduction", "distortion", "seconds")
+
+#: Environment of each local worker: one thread for numba and the BLAS, as each worker is one core.
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """One model of the input folder: its name, mesh and skeleton (None for glTF), or why it cannot be one."""
+
+    name: str
+    mesh: str
+    skeleton: str | None = None
+    problem: str | None = None
+
+
+def find_models(folder: str | os.PathLike) -> list[ModelSpec]:
+    """The models of a folder, by name.
+
+    ``X.glb``/``X.gltf`` is a model on its own; another mesh ``X.ext``
+    (:data:`supportless.io.MESH_FORMATS`) goes with ``X.tgf``. A mesh
+    without its skeleton is listed with a ``problem``.
+
+    Raises
+    ------
+    InputError
+        When ``folder`` is not a folder or holds no model.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(folder, "not a folder; give the folder of models to pose")
+    specs = []
+    for path in sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith(".")):
+        ext = path.suffix.lower().lstrip(".")
+        if ext in ("glb", "gltf"):
+            specs.append(ModelSpec(path.stem, str(path)))
+        elif ext in MESH_FORMATS:
+            skeleton = path.with_suffix(".tgf")
+            specs.append(ModelSpec(path.stem, str(path), str(skeleton)) if skeleton.is_file() else
+                         ModelSpec(path.stem, str(path), problem=f"no skeleton {skeleton.name} beside {path.name}"))
+    if not specs:
+        raise InputError(folder, f"no models here: put X.glb, or X.obj with X.tgf ({', '.join(MESH_FORMATS)})")
+    names = [s.name for s in specs]
+    return [s if names.count(s.name) == 1 else ModelSpec(s.name, s.mesh, s.skeleton,
+                                                         f"several meshes are named {s.name}; rename all but one")
+            for s in specs]
+
+
+def finished_row(out: str | os.PathLike, name: str) -> dict | None:
+    """The summary row of a model whose output folder is complete, or None."""
+    row = Path(out) / name / "row.json"
+    try:
+        return json.loads(row.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _failed(name: str, reason: str, seconds: float) -> dict:
+    return {"model": name, "status": "failed", "reason": reason, "seconds": round(seconds, 2)}
+
+
+def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_mm: float | None = None,
+              cache_dir: str | None = None, slice_check: bool = False) -> dict:
+    """Pose one model and write ``out/NAME/``; the Dask task. Never raises: a failure is a row.
+
+    Parameters
+    ----------
+    spec : ModelSpec
+    out : str
+        The batch's output folder.
+    settings : dict
+        :class:`supportless.settings.SearchSettings` fields.
+    up, height_mm, cache_dir
+        As for :func:`supportless.rig.load_rig`.
+    slice_check : bool
+        Also slice the rest and the found pose with PrusaSlicer.
+
+    Returns
+    -------
+    row : dict
+        The model's ``summary.csv`` row (:data:`COLUMNS`).
+    """
+    t0 = time.perf_counter()
+    if spec.problem:
+        return _failed(spec.name, spec.problem, 0.0)
+    final = Path(out) / spec.name
+    work = Path(tempfile.mkdtemp(prefix=f".{spec.name}.", dir=out))
+    try:
+        row = _pose_into(spec, work, settings, up, height_mm, cache_dir, slice_check)
+        row["seconds"] = round(time.perf_counter() - t0, 2)
+        write_json(work / "row.json", row)
+        if final.exists():  # --force: the old result goes only once the new one is complete
+            old = Path(tempfile.mkdtemp(prefix=f".{spec.name}.old.", dir=out))
+            os.replace(final, old / spec.name)
+            os.replace(work, final)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(work, final)
+        return row
+    except SupportlessError as exc:
+        return _failed(spec.name, str(exc), time.perf_counter() - t0)
+    except Exception as exc:  # noqa: BLE001 - one model's bug must not stop the catalogue
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        return _failed(spec.name, f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})",
+                       time.perf_counter() - t0)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cache_dir, slice_check) -> dict:
+    from .io import write_mesh, write_pose
+    from .report import build_report, write_pictures
+    from .rig import load_rig
+    from .search import optimize
+    from .settings import SearchSettings
+
+    rig = load_rig(spec.mesh, spec.skeleton, up, cache_dir=cache_dir, height_mm=height_mm)
+    result = optimize(rig, SearchSettings.from_dict(settings))
+    report = build_report(rig, result)
+    write_mesh(folder / f"{spec.name}.stl", result.print_vertices, rig.faces)
+    write_pose(folder / f"{spec.name}.pose.json", result.angles, rig.bones, rig.joints, rotation=result.rotation,
+               extra={"objective": result.value})
+    write_pictures(folder, rig, result, report)
+    predicted = report.get("predicted_slicer") or {}
+    row = {"model": spec.name, "status": "ok", "reason": "",
+           "predicted_before_mm": predicted.get("before_mm"), "predicted_after_mm": predicted.get("after_mm"),
+           "predicted_reduction": predicted.get("reduction"),
+           "distortion": result.settings.w_arap * result.terms["arap"] + result.settings.w_prior * result.terms["prior"]}
+    if slice_check and rig.dim == 3:
+        from .slicer import slice_check as slice_pair
+
+        sliced = slice_pair((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up).to_dict()
+        report["slice_check"] = sliced
+        row |= {"slicer_before_mm": sliced["before"]["support_mm"], "slicer_after_mm": sliced["after"]["support_mm"],
+                "slicer_reduction": None if sliced["reduction_percent"] is None else sliced["reduction_percent"] / 100}
+    write_json(folder / "report.json", report)
+    return row
+
+
+def write_summary(out: str | os.PathLike, rows: list[dict]) -> Path:
+    """Write ``out/summary.csv`` (atomically), one row per model in name order."""
+    path = Path(out) / "summary.csv"
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=COLUMNS, extrasaction="ignore", lineterminator="\n")
+    writer.writeheader()
+    for row in sorted(rows, key=lambda r: r["model"]):
+        writer.writerow({k: ("" if row.get(k) is None else row.get(k)) for k in COLUMNS})
+    with atomic_path(path) as tmp:
+        tmp.write_text(buffer.getvalue())
+    return path
+
+
+def write_contact_sheet(out: str | os.PathLike, rows: list[dict], columns: int = 3) -> Path | None:
+    """``out/contact_sheet.png``: each finished model's before/after picture with its reduction, or None."""
+    import matplotlib.image as mpimg
+    from matplotlib.figure import Figure
+
+    done = [r for r in sorted(rows, key=lambda r: r["model"]) if r.get("status") == "ok"
+            and (Path(out) / r["model"] / "before_after.png").is_file()]
+    if not done:
+        return None
+    n_rows = (len(done) + columns - 1) // columns
+    fig = Figure(figsize=(6 * columns, 3.3 * n_rows), dpi=80, facecolor="white")
+    for i, r in enumerate(done):
+        ax = fig.add_subplot(n_rows, columns, i + 1)
+        ax.imshow(mpimg.imread(Path(out) / r["model"] / "before_after.png"))
+        red = r.get("predicted_reduction")
+        ax.set_title(r["model"] + ("" if red is None else f": support {-100 * red:+.0f} % (predicted)"), fontsize=11)
+        ax.axis("off")
+    fig.tight_layout()
+    path = Path(out) / "contact_sheet.png"
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png")
+    return path
+
+
+def _client(scheduler: str | None, workers: int | None):
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise InputError(None, "batch runs on Dask, which is not installed: pip install 'supportless[dask]'") from None
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError) as exc:
+            raise InputError(None, f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+    n = workers or os.cpu_count() or 1
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, env=WORKER_ENV,
+                           dashboard_address=None, silence_logs=40)
+    return Client(cluster), cluster
+
+
+def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict | None = None, *, up: str = "y",
+              height_mm: float | None = None, cache_dir: str | None = None, slice_check: bool = False,
+              scheduler: str | None = None, workers: int | None = None, force: bool = False,
+              on_result: Callable[[dict, bool], None] | None = None) -> list[dict]:
+    """Pose every model of ``folder`` into ``out`` on Dask; returns the summary rows.
+
+    Parameters
+    ----------
+    folder, out : path
+        The models, and where their folders, ``summary.csv`` and the contact sheet go.
+    settings : dict, optional
+        :class:`supportless.settings.SearchSettings` fields for every model.
+    up, height_mm, cache_dir, slice_check
+        As for :func:`run_model`.
+    scheduler : str, optional
+        ``tcp://HOST:PORT`` of a running Dask scheduler; default a
+        ``LocalCluster`` of ``workers`` single-threaded processes (default: one per core).
+    force : bool
+        Pose models whose output folder is complete again.
+    on_result : callable, optional
+        ``on_result(row, skipped)`` for each model as it finishes (or is skipped).
+
+    Returns
+    -------
+    rows : list of dict
+        One per model (:data:`COLUMNS`). On Ctrl-C, ``KeyboardInterrupt``
+        propagates after ``summary.csv`` holds every model finished so far.
+    """
+    specs = find_models(folder)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    for spec in specs:  # scratch folders of a run that was killed
+        for stale in out.glob(f".{spec.name}.*"):
+            shutil.rmtree(stale, ignore_errors=True)
+    rows: dict[str, dict] = {}
+    todo = []
+    for spec in specs:
+        row = None if force else finished_row(out, spec.name)
+        if row is not None:
+            rows[spec.name] = row
+            if on_result is not None:
+                on_result(row, True)
+        else:
+            todo.append(spec)
+    if todo:
+        from dask.distributed import as_completed
+
+        client, cluster = _client(scheduler, workers)
+        try:
+            futures = [client.submit(run_model, spec, str(out), dict(settings or {}), up, height_mm, cache_dir,
+                                     slice_check, key=f"supportless-{spec.name}-{time.time_ns()}", pure=False)
+                       for spec in todo]
+            for future in as_completed(futures):
+                row = future.result()
+                rows[row["model"]] = row
+                write_summary(out, list(rows.values()))
+                if on_result is not None:
+                    on_result(row, False)
+        except KeyboardInterrupt:
+            client.cancel(futures)
+            raise
+        finally:
+            write_summary(out, list(rows.values()))
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    write_summary(out, list(rows.values()))
+    write_contact_sheet(out, list(rows.values()))
+    return [rows[s.name] for s in specs if s.name in rows]

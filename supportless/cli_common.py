@@ -1,0 +1,181 @@
+"""What the commands share: exit statuses, one-line errors, loading a rig, the rig and search options.
+
+Separate from :mod:`supportless.cli` so that commands in other modules
+(:mod:`supportless.cli_batch`) use the same options and errors without
+importing the command group.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+import numpy as np
+
+from .errors import SupportlessError
+from .terminal import ClosableStdout, drop_stdout
+
+EXIT_USER_ERROR = 2
+#: Exit status when an output file could not be written (the others were).
+EXIT_WRITE_FAILED = 1
+#: Exit status of a search stopped by Ctrl-C, after its best pose is written.
+EXIT_INTERRUPTED = 130
+#: Exit status when a tool the command needs (PrusaSlicer) is missing or fails.
+EXIT_MISSING_TOOL = 3
+
+
+def _fail(message: str) -> None:
+    click.echo(f"supportless: error: {message}", err=True)
+    sys.exit(EXIT_USER_ERROR)
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(file=ClosableStdout(sys.stdout), highlight=False)
+
+
+def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None):
+    from .rig import load_rig
+
+    def progress(msg):
+        if not quiet:
+            click.echo(f"  {msg} ...", err=True)
+
+    rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
+                   progress=progress, height_mm=height_mm)
+    source = rig.info.get("gltf")
+    if source is not None:  # what was done to the glTF asset, one line per step
+        for line in source["log"]:
+            if not quiet and not line.startswith("warning"):
+                click.echo(f"  glTF: {line}", err=True)
+    for warning in rig.info.get("warnings", []):
+        if source is not None and warning in source["log"] and not warning.startswith("warning"):
+            continue
+        click.echo(f"supportless: warning: {rig.name}: {warning.removeprefix('warning: ')}", err=True)
+    if source is not None and not quiet:
+        h = float(np.ptp(rig.vertices @ rig.up))
+        click.echo(f"  print body {h:.1f} mm tall" + ("" if height_mm else " (glTF metres as millimetres; "
+                                                      "--height-mm H scales it)"), err=True)
+    return rig
+
+
+def rig_options(f):
+    """Options shared by every command that reads a rigged model."""
+    f = click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
+                     help="Rig cache folder (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")(f)
+    f = click.option("--no-cache", is_flag=True, help="Prepare the rig again; do not read or write the cache.")(f)
+    f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
+                     help="Scale the model to this height along --up, in millimetres (default: as read; "
+                          "glTF metres become millimetres).")(f)
+    f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed skinning weights (.dmat, one row per --tets vertex); for a glTF model "
+                          "'skin' (its own weights, the default) or 'bbw' (recomputed).")(f)
+    f = click.option("--tets", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
+    f = click.option("--up", default="y", show_default=True,
+                     help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
+    f = click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None,
+                     help="TGF skeleton (default: MODEL with .tgf; a rigged .glb/.gltf needs none).")(f)
+    return f
+
+
+class _Group(click.Group):
+    """Turns the package's own errors into one line and exit status 2."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except SupportlessError as exc:
+            _fail(str(exc))
+        except KeyboardInterrupt:
+            click.echo("supportless: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        except BrokenPipeError:  # the reader of stdout went away; the files are written before the summary
+            drop_stdout()
+            sys.exit(0)
+
+
+def _search_options(f):
+    """The search's options; their defaults are :class:`~supportless.settings.SearchSettings`'s."""
+    from .settings import SearchSettings
+
+    d = SearchSettings()
+    opts = [
+        click.option("--optimizer", type=click.Choice(["pso", "cma"]), default=d.optimizer, show_default=True,
+                     help="pso: the paper's particle swarm, --particles for --iterations; cma: CMA-ES, "
+                          "--particles/5 samples per generation for --iterations generations (faster, "
+                          "sometimes worse)."),
+        click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
+        click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
+        click.option("--seed", default=d.seed, show_default=True, type=click.IntRange(min=0)),
+        click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
+                     help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
+                          "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),
+        click.option("--overhang-angle", default=None, type=click.FloatRange(0, 90),
+                     help="Overhang threshold, degrees from the build plate [default: the printer profile's: "
+                          f"support_material_threshold + 1, or PrusaSlicer's automatic one, {d.overhang_angle:.1f} "
+                          "for its defaults]."),
+        click.option("--overhang-margin", default=d.overhang_margin, show_default=True,
+                     type=click.FloatRange(0, 45),
+                     help="The search treats faces up to threshold + margin as needing support, so none "
+                          "are left just past the threshold, where slicers still support them."),
+        click.option("--w-arap", type=float, default=d.w_arap, show_default=True,
+                     help="Weight of the distortion term."),
+        click.option("--w-overhang", type=float, default=d.w_overhang, show_default=True,
+                     help="Weight of the support term."),
+        click.option("--w-intersect", type=float, default=d.w_intersect, show_default=True,
+                     help="Weight of the self-intersection term."),
+        click.option("--overhang-model", type=click.Choice(["prism", "column", "slicer"]), default=d.overhang_model,
+                     show_default=True,
+                     help="Support estimate the search minimises: the paper's prisms, columns to the body "
+                          "below, or the slicer model fitted to PrusaSlicer (3D)."),
+        click.option("--w-prior", type=float, default=d.w_prior, show_default=True,
+                     help="Weight of the natural-pose prior (turning much of the body costs more)."),
+        click.option("--joint-limit", type=click.FloatRange(0, 180), default=d.joint_limit,
+                     show_default=True, help="Largest rotation of any joint, degrees (one angle); 0 with "
+                                             "--orient free turns the model without posing it."),
+        click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
+                     help="free: choose the print orientation with the pose (-o is written turned); "
+                          "keep: print the model as it stands."),
+        click.option("--limit", "limits", multiple=True,
+                     help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
+        click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
+                     help="Reject poses that touch the plate with a new part or would fall over."),
+        click.option("--symmetric", is_flag=True, default=d.symmetric,
+                     help="Keep left/right pairs of bones mirror images (found from the rest skeleton)."),
+        click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
+        click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _printer_profile(path):
+    """The printer profile of ``--printer-profile`` (PrusaSlicer's defaults when None)."""
+    from .profile import default_profile, read_printer_profile
+
+    return default_profile() if path is None else read_printer_profile(path)
+
+
+def _settings(profile=None, **options):
+    """The :class:`~supportless.settings.SearchSettings` of the search options.
+
+    ``overhang_angle=None`` takes the threshold of ``profile``.
+    """
+    from .settings import SearchSettings
+
+    if options.get("overhang_angle", 0.0) is None:
+        options["overhang_angle"] = (profile or _printer_profile(None)).overhang_angle
+    return SearchSettings(**options)  # bad values are InputError: one line
+
+
+def _require_slicer(option: str) -> None:
+    """Exit with one line (status 3) before any work when PrusaSlicer is missing."""
+    from .slicer import find_prusa_slicer
+
+    if not find_prusa_slicer():
+        click.echo(f"supportless: error: {option} needs PrusaSlicer, which was not found "
+                   "(apt-get install prusa-slicer, or set SUPPORTLESS_PRUSA_SLICER)", err=True)
+        sys.exit(EXIT_MISSING_TOOL)

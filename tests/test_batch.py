@@ -1,0 +1,157 @@
+"""``supportless batch`` on Dask (issue 17): two small models and broken ones, resumable, on a local
+cluster and on a real scheduler with a worker started here."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+import supportless as sl
+from supportless.batch import COLUMNS, find_models, run_model
+
+EXE = Path(sys.executable).with_name("supportless")
+FAST = ["--particles", "12", "--iterations", "3", "--orient", "keep"]
+
+
+@pytest.fixture()
+def folder(tmp_path):
+    """branch and arm (OBJ + TGF), a broken OBJ with its TGF, and a mesh with no skeleton."""
+    d = tmp_path / "in"
+    d.mkdir()
+    for name in ("branch", "arm"):
+        V, F, J, B = sl.demo_figure(name)[:4]
+        sl.write_mesh(d / f"{name}.obj", V, F)
+        sl.write_tgf(d / f"{name}.tgf", J, B)
+    (d / "broken.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2 3\n")
+    (d / "broken.tgf").write_text("1 0 0 0\n2 0 1 0\n#\n1 2\n")
+    (d / "lonely.stl").write_bytes(b"")
+    return d
+
+
+def _summary(out):
+    with open(out / "summary.csv", newline="") as fh:
+        return {row["model"]: row for row in csv.DictReader(fh)}
+
+
+def _check_outputs(out, names):
+    for name in names:
+        files = {p.name for p in (out / name).iterdir()}
+        assert {f"{name}.stl", f"{name}.pose.json", "report.json", "row.json", "before_after.png"} <= files
+        assert json.loads((out / name / "report.json").read_text())["model"] == name
+
+
+def test_find_models_pairs_meshes_and_skeletons(folder):
+    specs = {s.name: s for s in find_models(folder)}
+    assert set(specs) == {"arm", "branch", "broken", "lonely"}
+    assert specs["branch"].skeleton.endswith("branch.tgf") and specs["branch"].problem is None
+    assert "no skeleton lonely.tgf" in specs["lonely"].problem
+    with pytest.raises(sl.InputError, match="no models here"):
+        find_models(folder / "..")  # the test's folder holds only the 'in' folder
+
+
+def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path):
+    from supportless.cli import main
+
+    out = tmp_path / "out"
+    args = ["batch", str(folder), "-o", str(out), "--workers", "2", "--cache-dir", str(tmp_path / "cache"), *FAST]
+    first = CliRunner().invoke(main, args)
+    assert first.exit_code == 1, first.output  # some models failed
+    rows = _summary(out)
+    assert list(rows["arm"]) == list(COLUMNS)
+    assert {m: r["status"] for m, r in rows.items()} == {"arm": "ok", "branch": "ok", "broken": "failed",
+                                                        "lonely": "failed"}
+    assert "cannot read as OBJ" in rows["broken"]["reason"] and "no skeleton" in rows["lonely"]["reason"]
+    assert float(rows["branch"]["predicted_after_mm"]) < float(rows["branch"]["predicted_before_mm"])
+    _check_outputs(out, ["arm", "branch"])
+    assert not (out / "broken").exists() and (out / "contact_sheet.png").stat().st_size > 0
+    stamp = (out / "arm" / "row.json").stat().st_mtime_ns
+    again = CliRunner().invoke(main, args)
+    assert "arm: already done" in again.output and "branch: already done" in again.output
+    assert (out / "arm" / "row.json").stat().st_mtime_ns == stamp  # not posed again
+    assert _summary(out)["arm"]["status"] == "ok"
+
+
+def test_a_model_that_fails_midway_leaves_no_folder_that_looks_finished(folder, tmp_path, monkeypatch):
+    import supportless.report as report
+
+    def crash(*args, **kwargs):
+        raise RuntimeError("disk went away")
+
+    monkeypatch.setattr(report, "write_pictures", crash)  # after the mesh and the pose are written
+    out = tmp_path / "out"
+    out.mkdir()
+    spec = next(s for s in find_models(folder) if s.name == "branch")
+    row = run_model(spec, str(out), {"particles": 8, "iterations": 2, "orient": "keep"}, "y", None,
+                    str(tmp_path / "cache"))
+    assert row["status"] == "failed" and "RuntimeError: disk went away" in row["reason"]
+    assert list(out.iterdir()) == []  # neither a half folder nor the temporary one
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
+    dask = Path(sys.executable).with_name("dask")
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    env = dict(os.environ, NUMBA_NUM_THREADS="1")
+    scheduler = subprocess.Popen([str(dask), "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                                  "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    worker = None
+    try:
+        worker = subprocess.Popen([str(dask), "worker", address, "--nthreads", "1", "--no-dashboard"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+        out = tmp_path / "out"
+        run = subprocess.run([str(EXE), "batch", str(folder), "-o", str(out), "--scheduler", address,
+                              "--cache-dir", str(tmp_path / "cache"), "-q", *FAST],
+                             capture_output=True, text=True, timeout=600, env=env)
+        assert run.returncode == 1, run.stderr  # the two broken models
+        rows = _summary(out)
+        assert rows["arm"]["status"] == "ok" and rows["branch"]["status"] == "ok"
+        assert rows["broken"]["status"] == "failed"
+        _check_outputs(out, ["arm", "branch"])
+    finally:
+        for p in (worker, scheduler):
+            if p is not None:
+                p.terminate()
+                try:
+                    p.wait(timeout=30)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+
+
+def test_killing_a_run_midway_leaves_no_model_that_looks_finished(folder, tmp_path):
+    out = tmp_path / "out"
+    slow = ["--particles", "40", "--iterations", "30", "--orient", "keep"]
+    proc = subprocess.Popen([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
+                             "--cache-dir", str(tmp_path / "cache"), *slow],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and not (out / "summary.csv").is_file():
+        time.sleep(0.2)
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGKILL)  # the whole run, workers included, at once
+    proc.wait(timeout=30)
+    for folder_ in (p for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")):
+        _check_outputs(out, [folder_.name])  # any model folder there is complete
+    rerun = subprocess.run([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
+                            "--cache-dir", str(tmp_path / "cache"), *FAST], capture_output=True, text=True,
+                           timeout=600)
+    assert rerun.returncode == 1, rerun.stderr
+    rows = _summary(out)
+    assert rows["arm"]["status"] == rows["branch"]["status"] == "ok"
+    _check_outputs(out, ["arm", "branch"])
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # the killed run's scratch is cleared
