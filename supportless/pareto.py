@@ -37,8 +37,10 @@ from .energies.slicer_model import predicted_support_mm
 from .geometry import place_on_plate, print_pose
 from .report import PREDICTION_HEIGHT_MM
 from .rig import Rig
+from .orientation import orientation_params, rotations_from_params
 from .search import PoseResult, measured_at, optimize, pose_distance_deg
 from .settings import SearchSettings
+from .symmetry import PoseLayout, require_mirror
 
 __all__ = ["CANDIDATES_PER_SEARCH", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose", "front_paths", "non_dominated", "pareto_front",
            "spread", "sweep_factors", "write_front"]
@@ -49,6 +51,9 @@ SPAN = 4.0
 #: The searches beside the default weights' share this many times its iterations (they start from a
 #: neighbour's pose): with the default's own, the front costs about 1 + SHORT_SHARE single searches.
 SHORT_SHARE = 1.5
+
+#: Population of the NSGA-II front (``method="nsga2"``).
+NSGA_POPULATION = 100
 
 #: How many of each search's other good positions join the pool the front is chosen from.
 CANDIDATES_PER_SEARCH = 60
@@ -206,9 +211,60 @@ def _measure(rig: Rig, objective, angles: np.ndarray, rotations: np.ndarray, bas
     return np.asarray(support, float), np.asarray(distortion, float), ok
 
 
+def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, seconds: float, stop=None):
+    """NSGA-II (pymoo) on the pose (and turn) variables for ``seconds``, seeded with the default search's poses.
+
+    Objectives: the search's support estimate (the normalised overhang term)
+    and the distortion; constraints: the hard rules' violation and the
+    self-intersection volume. Returns the final population's
+    ``angles (q, m, 3)`` and ``rotations (q, d, d)``.
+    """
+    from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.problem import Problem
+    from pymoo.optimize import minimize
+    from pymoo.termination import get_termination
+
+    mirror = require_mirror(rig) if base.symmetric else None
+    layout = PoseLayout(rig, base.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
+                        np.radians(base.joint_limits(rig)), mirror)
+    k = layout.count
+    o = rig.dim - 1 if base.orient == "free" else 0
+    objective = base.objective(rig)
+    lower = np.concatenate([layout.lower, np.full(o, -np.pi)])
+    upper = np.concatenate([layout.upper, np.full(o, np.pi)])
+
+    def decode(X):
+        R = rotations_from_params(X[:, k:], rig.up) if o else np.broadcast_to(np.eye(rig.dim), (len(X), rig.dim,
+                                                                                                 rig.dim))
+        return layout.to_angles(X[:, :k]), np.ascontiguousarray(R)
+
+    class Posing(Problem):
+        def __init__(self):
+            super().__init__(n_var=k + o, n_obj=2, n_ieq_constr=2, xl=lower, xu=upper)
+
+        def _evaluate(self, X, out, *args, **kwargs):
+            A, R = decode(X)
+            t = objective.terms(A, R if o else None)
+            out["F"] = np.column_stack([t["overhang"], base.w_arap * t["arap"] + base.w_prior * t["prior"]])
+            out["G"] = np.column_stack([t["violation"], t["intersection"]])
+
+    rng = np.random.default_rng(base.seed)
+    c = default.candidates or {"angles": default.angles[None], "rotations": default.rotation[None]}
+    seeds = [np.concatenate([layout.from_angles(a), orientation_params(r, rig.up) if o else []])
+             for a, r in zip(c["angles"][:NSGA_POPULATION // 2], c["rotations"][:NSGA_POPULATION // 2])]
+    X0 = lower + rng.random((NSGA_POPULATION, k + o)) * (upper - lower)
+    X0[0] = 0.0  # the rest pose, upright
+    X0[1:1 + len(seeds)] = np.clip(seeds, lower, upper)[:NSGA_POPULATION - 1]
+    termination = get_termination("time", max(float(seconds), 1.0))
+    res = minimize(Posing(), NSGA2(pop_size=NSGA_POPULATION, sampling=X0), termination, seed=base.seed,
+                   verbose=False)
+    return decode(np.atleast_2d(res.pop.get("X")))
+
+
 def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 5,
                  callback: Callable[[int, int, PoseResult], None] | None = None,
-                 per_search: int = CANDIDATES_PER_SEARCH, stop: Callable[[], bool] | None = None) -> Front:
+                 per_search: int = CANDIDATES_PER_SEARCH, stop: Callable[[], bool] | None = None,
+                 method: str = "sweep") -> Front:
     """Poses along the front of least support against least distortion.
 
     Parameters
@@ -227,6 +283,10 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     stop : callable, optional
         ``stop() -> bool``, asked after each iteration: True ends the search
         under way and the sweep (a stop button).
+    method : {"sweep", "nsga2"}
+        ``sweep``: the weight sweep above. ``nsga2``: the default weights'
+        search, then pymoo's NSGA-II seeded with its poses for
+        ``SHORT_SHARE`` times its time; its final population joins the pool.
 
     Returns
     -------
@@ -238,11 +298,14 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     """
     t0 = time.perf_counter()
     base = settings or SearchSettings()
-    factors = sweep_factors(count)
+    if method not in ("sweep", "nsga2"):
+        raise ValueError(f"method must be 'sweep' or 'nsga2', not {method!r}")
+    searches = count if method == "sweep" else 1
+    factors = sweep_factors(searches)
     middle = int(np.argmin(np.abs(np.log(factors))))
-    short = max(1, int(round(base.iterations * SHORT_SHARE / (count - 1)))) if count > 1 else base.iterations
+    short = max(1, int(round(base.iterations * SHORT_SHARE / (searches - 1)))) if searches > 1 else base.iterations
     # the middle first, then outwards, each search started from its inner neighbour's pose
-    order = [middle] + [i for k in range(1, count) for i in (middle - k, middle + k) if 0 <= i < count]
+    order = [middle] + [i for k in range(1, searches) for i in (middle - k, middle + k) if 0 <= i < searches]
     found: dict[int, PoseResult] = {}
     for done, i in enumerate(order, 1):
         start = found.get(i + 1 if i < middle else i - 1)
@@ -253,11 +316,14 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
                             start_rotation=None if start is None or base.orient != "free" else start.rotation,
                             callback=None if stop is None else lambda *_: False if stop() else None)
         if callback is not None:
-            callback(done, count, found[i])
+            callback(done, searches, found[i])
         if found[i].interrupted:
             break
     objective = base.objective(rig)
     A, R, F = _pool([(float(factors[i]), found[i]) for i in sorted(found)], per_search)
+    if method == "nsga2" and not found[middle].interrupted:
+        An, Rn = _nsga2_pool(rig, base, found[middle], SHORT_SHARE * found[middle].runtime_seconds, stop)
+        A, R, F = np.concatenate([A, An]), np.concatenate([R, Rn]), np.concatenate([F, np.ones(len(An))])
     support, distortion, ok = _measure(rig, objective, A, R, base)
     idx = np.flatnonzero(ok)
     idx = idx[non_dominated(support[idx], distortion[idx])]
