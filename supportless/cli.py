@@ -77,12 +77,12 @@ def _run_search(rig, console, settings, quiet=False):
         return optimize(rig, settings, callback=callback)
 
 
-def _run_front(rig, console, settings, count, quiet=False):
+def _run_front(rig, console, settings, count, method, quiet=False):
     """Search the front of least support against least distortion (see :mod:`supportless.pareto`)."""
     from .pareto import pareto_front
 
     settings.fixed_bones(rig)  # a bad --fix/--free: before the searches
-    front = pareto_front(rig, settings, count, callback=None if quiet else lambda *a: console.print(
+    front = pareto_front(rig, settings, count, method=method, callback=None if quiet else lambda *a: console.print(
         f"  front: search {a[0]} of {a[1]} took {a[2].runtime_seconds:.1f} s"))
     for line in [] if quiet else front.summary():
         console.print(f"  {line}")
@@ -202,9 +202,11 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--pareto", "pareto_count", type=click.IntRange(min=2), default=None,
               help="Also return up to N poses along the front of least support against least distortion: "
                    "OUT-1 .. OUT-N (least support first), their poses and OUT-front.png.")
+@click.option("--pareto-method", type=click.Choice(["nsga2", "sweep"]), default="nsga2", show_default=True,
+              help="How the front is found: NSGA-II after the single search, or a sweep of the distortion weight.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, output, upright_out, report_path, pose,
-             pictures, slice_check_flag, slice_rank_count, pareto_count, quiet, **search_options):
+             pictures, slice_check_flag, slice_rank_count, pareto_count, pareto_method, quiet, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
 
@@ -231,7 +233,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     if slice_rank_count > 1 and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     with deferred_interrupt():  # Ctrl-C stops the search; what it found is still written
-        front = _run_front(rig, console, settings, pareto_count, quiet) if pareto_count else None
+        front = _run_front(rig, console, settings, pareto_count, pareto_method, quiet) if pareto_count else None
         result = front.default if front else _run_search(rig, console, settings, quiet)
         if result.interrupted:
             console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")

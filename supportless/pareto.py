@@ -2,24 +2,34 @@
 
 The weights of distortion and support are a trade-off with no right value: a
 print farm wants the least plastic, an artist the pose barely touched.
-:func:`pareto_front` sweeps the weight of the distortion terms (ARAP and the
-natural-pose prior) over :data:`SPAN` ``** [-1, 1]`` times its default with
-the support weight fixed, one search per weight, each started from its
-neighbour's pose (and print turn): the default weight's search first with the
-full iterations, then outwards with ``SHORT_SHARE / (N - 1)`` of them each, so
-the whole front costs about two and a half single searches. Every search keeps the hard
-rules (joint limits, standing, no self-intersection), so every pose of the
-front does.
+:func:`pareto_front` gives the choice. Two methods, measured against each
+other on the zoo (benchmarks/RESULTS.md, "A front of poses"):
 
-The searches' results and their other good positions (the particles' bests,
-:data:`CANDIDATES_PER_SEARCH` each) make a pool, each pose measured with one
-yardstick: *support* as the slicer model predicts PrusaSlicer's filament
-(mm, 60 mm tall; the prism estimate for planar figures) and *distortion* as
-the default objective's distortion part (``w_arap * arap + w_prior * prior``
-at the default weights). Poses that break a rule, poses another pose beats
-on both measures, and near-copies (every joint and the turn within
-:data:`SAME_DEGREES`) are dropped; of the rest, the front's two ends and the
-poses farthest from those already chosen are returned, least support first.
+``nsga2`` (the default)
+    The single search at the default weights first (so the front is never
+    worse at its least-support end than the single search), then pymoo's
+    NSGA-II on the same variables (pose and print turn), seeded with that
+    search's poses, minimising support (the search's estimate) and
+    distortion, with the hard rules (joint limits, standing,
+    self-intersection) as constraints, for :data:`SHORT_SHARE` times the
+    search's evaluations.
+``sweep``
+    The weight of the distortion terms swept over :data:`SPAN` ``** [-1, 1]``
+    times its default, one search per weight, each started from its
+    neighbour's pose: the default weight's search with the full iterations,
+    the others ``SHORT_SHARE / (N - 1)`` of them each.
+
+Either way, the searches' results and other good positions (the particles'
+bests, :data:`CANDIDATES_PER_SEARCH` each, and NSGA-II's last population)
+make a pool, each pose measured with one yardstick: *support* as the slicer
+model predicts PrusaSlicer's filament (mm, 60 mm tall; the prism estimate
+for planar figures) and *distortion* as the default objective's distortion
+part (``w_arap * arap + w_prior * prior`` at the default weights). Poses
+that break a rule, poses another pose beats on both measures, and
+near-copies (every joint and the turn within :data:`SAME_DEGREES`) are
+dropped; of the rest, the front's two ends and the poses farthest from those
+already chosen are returned, least support first, each checked exactly for
+self-intersection. The whole front costs about 2.5 single searches.
 """
 
 from __future__ import annotations
@@ -38,7 +48,8 @@ from .geometry import place_on_plate, print_pose
 from .report import PREDICTION_HEIGHT_MM
 from .rig import Rig
 from .orientation import orientation_params, rotations_from_params
-from .search import PoseResult, measured_at, optimize, pose_distance_deg
+from .interrupt import requested
+from .search import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance_deg
 from .settings import SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
@@ -211,8 +222,11 @@ def _measure(rig: Rig, objective, angles: np.ndarray, rotations: np.ndarray, bas
     return np.asarray(support, float), np.asarray(distortion, float), ok
 
 
-def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, seconds: float, stop=None):
-    """NSGA-II (pymoo) on the pose (and turn) variables for ``seconds``, seeded with the default search's poses.
+def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, stop=None):
+    """NSGA-II (pymoo) on the pose (and turn) variables, seeded with the default search's poses.
+
+    It runs for ``SHORT_SHARE`` times the default search's evaluations (a
+    fixed number of generations: same seed, same front).
 
     Objectives: the search's support estimate (the normalised overhang term)
     and the distortion; constraints: the hard rules' violation and the
@@ -220,9 +234,9 @@ def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, seconds: fl
     ``angles (q, m, 3)`` and ``rotations (q, d, d)``.
     """
     from pymoo.algorithms.moo.nsga2 import NSGA2
+    from pymoo.core.callback import Callback
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
-    from pymoo.termination import get_termination
 
     mirror = require_mirror(rig) if base.symmetric else None
     layout = PoseLayout(rig, base.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
@@ -255,16 +269,23 @@ def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, seconds: fl
     X0 = lower + rng.random((NSGA_POPULATION, k + o)) * (upper - lower)
     X0[0] = 0.0  # the rest pose, upright
     X0[1:1 + len(seeds)] = np.clip(seeds, lower, upper)[:NSGA_POPULATION - 1]
-    termination = get_termination("time", max(float(seconds), 1.0))
-    res = minimize(Posing(), NSGA2(pop_size=NSGA_POPULATION, sampling=X0), termination, seed=base.seed,
-                   verbose=False)
+    evaluations = base.particles * base.iterations * (1.0 + (1.0 / TURN_SHARE if o else 0.0))
+    generations = max(1, int(round(SHORT_SHARE * evaluations / NSGA_POPULATION)))
+
+    class Stop(Callback):
+        def notify(self, algorithm):
+            if stop is not None and stop() or requested():
+                algorithm.termination.force_termination = True
+
+    res = minimize(Posing(), NSGA2(pop_size=NSGA_POPULATION, sampling=X0), ("n_gen", generations), seed=base.seed,
+                   verbose=False, callback=Stop())
     return decode(np.atleast_2d(res.pop.get("X")))
 
 
 def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 5,
                  callback: Callable[[int, int, PoseResult], None] | None = None,
                  per_search: int = CANDIDATES_PER_SEARCH, stop: Callable[[], bool] | None = None,
-                 method: str = "sweep") -> Front:
+                 method: str = "nsga2") -> Front:
     """Poses along the front of least support against least distortion.
 
     Parameters
@@ -283,10 +304,12 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     stop : callable, optional
         ``stop() -> bool``, asked after each iteration: True ends the search
         under way and the sweep (a stop button).
-    method : {"sweep", "nsga2"}
-        ``sweep``: the weight sweep above. ``nsga2``: the default weights'
-        search, then pymoo's NSGA-II seeded with its poses for
-        ``SHORT_SHARE`` times its time; its final population joins the pool.
+    method : {"nsga2", "sweep"}
+        ``nsga2`` (the default): the default weights' search, then pymoo's
+        NSGA-II seeded with its poses for ``SHORT_SHARE`` times its
+        evaluations; its final population joins the pool. ``sweep``: the
+        weight sweep above. On the zoo the NSGA-II front has the larger
+        hypervolume in less time (benchmarks/RESULTS.md, "A front of poses").
 
     Returns
     -------
@@ -322,7 +345,7 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     objective = base.objective(rig)
     A, R, F = _pool([(float(factors[i]), found[i]) for i in sorted(found)], per_search)
     if method == "nsga2" and not found[middle].interrupted:
-        An, Rn = _nsga2_pool(rig, base, found[middle], SHORT_SHARE * found[middle].runtime_seconds, stop)
+        An, Rn = _nsga2_pool(rig, base, found[middle], stop)
         A, R, F = np.concatenate([A, An]), np.concatenate([R, Rn]), np.concatenate([F, np.ones(len(An))])
     support, distortion, ok = _measure(rig, objective, A, R, base)
     idx = np.flatnonzero(ok)

@@ -43,10 +43,16 @@ def test_sweep_factors_are_symmetric_about_the_default():
         sweep_factors(0)
 
 
-@pytest.fixture(scope="module")
-def tpose_front(tpose_rig):
+@pytest.fixture(scope="module", params=["nsga2", "sweep"])
+def tpose_front(tpose_rig, request):
     settings = sl.SearchSettings(particles=40, iterations=16, seed=2)
-    return tpose_rig, settings, pareto_front(tpose_rig, settings, 4)
+    return tpose_rig, settings, pareto_front(tpose_rig, settings, 4, method=request.param)
+
+
+def test_the_same_seed_gives_the_same_front(tpose_rig):
+    settings = sl.SearchSettings(particles=16, iterations=4, seed=5)
+    a, b = (pareto_front(tpose_rig, settings, 3) for _ in range(2))
+    assert [p.support for p in a.poses] == [p.support for p in b.poses]
 
 
 def test_the_front_is_spread_non_dominated_and_keeps_the_rules(tpose_front):
