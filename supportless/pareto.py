@@ -53,8 +53,8 @@ from .search import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance
 from .settings import SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
-__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose", "front_paths", "non_dominated", "pareto_front",
-           "spread", "sweep_factors", "write_front"]
+__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose",
+           "front_paths", "non_dominated", "pareto_front", "spread", "sweep_factors", "write_front"]
 
 #: The distortion weights are swept from 1/SPAN to SPAN times the default.
 SPAN = 4.0

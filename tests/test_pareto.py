@@ -1,6 +1,7 @@
 """The front of least support against least distortion (issue 16)."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -109,3 +110,15 @@ def test_cli_refuses_pareto_with_slice_rank(tmp_path, branch_files):
     r = CliRunner().invoke(main, ["optimize", str(branch_files["mesh"]), "--pareto", "3", "--slice-rank", "2",
                                   "-o", str(tmp_path / "o.stl")])
     assert r.exit_code != 0 and "--pareto and --slice-rank" in r.output + (r.stderr if r.stderr_bytes else "")
+
+
+def test_cli_front_of_a_gltf_character(tmp_path, shared_data):
+    from supportless.cli import main
+
+    r = CliRunner().invoke(main, ["optimize", str(shared_data / "gltf" / "Fox.glb"), "--particles", "12",
+                                  "--iterations", "3", "--pareto", "2", "-q", "-o", str(tmp_path / "fox.glb"),
+                                  "--cache-dir", str(tmp_path / "cache"), "--report", str(tmp_path / "r.json")])
+    assert r.exit_code == 0, r.output
+    front = json.loads((tmp_path / "r.json").read_text())["pareto"]
+    assert front and all(Path(e["mesh"]).is_file() and Path(e["pose"]).is_file() for e in front)
+    assert (tmp_path / "fox.glb").is_file() and (tmp_path / "fox-front.png").is_file()
