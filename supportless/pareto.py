@@ -53,7 +53,7 @@ from .search import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance
 from .settings import SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
-__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose",
+__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "NSGA_TIME_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose",
            "front_paths", "non_dominated", "pareto_front", "spread", "sweep_factors", "write_front"]
 
 #: The distortion weights are swept from 1/SPAN to SPAN times the default.
@@ -67,8 +67,13 @@ SHORT_SHARE = 1.5
 NSGA_POPULATION = 100
 
 #: NSGA-II evaluates this many times the single search's poses (each costs more than a swarm's
-#: evaluation, which may skip the intersection term): the front costs about 2.5 single searches.
-NSGA_SHARE = 0.9
+#: evaluation, which may skip the intersection term) ...
+NSGA_SHARE = 0.6
+
+#: ... and stops early when it has run this many times the single search's time (or 5 s, if longer), so
+#: the front costs at most about 2.5 single searches. Only a run that reaches this cap depends on the
+#: machine's speed; otherwise the same seed gives the same front.
+NSGA_TIME_SHARE = 1.4
 
 #: How many of each search's other good positions join the pool the front is chosen from.
 CANDIDATES_PER_SEARCH = 60
@@ -230,7 +235,8 @@ def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, stop=None):
     """NSGA-II (pymoo) on the pose (and turn) variables, seeded with the default search's poses.
 
     It runs for ``NSGA_SHARE`` times the default search's evaluations (a
-    fixed number of generations: same seed, same front).
+    fixed number of generations), or :data:`NSGA_TIME_SHARE` times its time
+    if that comes first.
 
     Objectives: the search's support estimate (the normalised overhang term)
     and the distortion; constraints: the hard rules' violation and the
@@ -276,9 +282,11 @@ def _nsga2_pool(rig: Rig, base: SearchSettings, default: PoseResult, stop=None):
     evaluations = base.particles * base.iterations * (1.0 + (1.0 / TURN_SHARE if o else 0.0))
     generations = max(1, int(round(NSGA_SHARE * evaluations / NSGA_POPULATION)))
 
+    deadline = time.perf_counter() + max(NSGA_TIME_SHARE * default.runtime_seconds, 5.0)
+
     class Stop(Callback):
         def notify(self, algorithm):
-            if stop is not None and stop() or requested():
+            if stop is not None and stop() or requested() or time.perf_counter() > deadline:
                 algorithm.termination.force_termination = True
 
     res = minimize(Posing(), NSGA2(pop_size=NSGA_POPULATION, sampling=X0), ("n_gen", generations), seed=base.seed,
