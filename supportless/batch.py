@@ -163,7 +163,8 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     row = {"model": spec.name, "status": "ok", "reason": "",
            "predicted_before_mm": predicted.get("before_mm"), "predicted_after_mm": predicted.get("after_mm"),
            "predicted_reduction": predicted.get("reduction"),
-           "distortion": result.settings.w_arap * result.terms["arap"] + result.settings.w_prior * result.terms["prior"]}
+           "distortion": (result.settings.w_arap * result.terms["arap"]
+                          + result.settings.w_prior * result.terms["prior"])}
     if slice_check and rig.dim == 3:
         from .slicer import slice_check as slice_pair
 

@@ -353,7 +353,8 @@ def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, po
 
     for path in (output, upright_out):
         _check_mesh_path(path)
-    check_output_paths([("-o", output), ("--upright-out", upright_out)], (), _inputs(model, skeleton, tets, weights, pose))
+    check_output_paths([("-o", output), ("--upright-out", upright_out)], (),
+                       _inputs(model, skeleton, tets, weights, pose))
     rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
     angles = read_pose(pose, rig.bones)
     R = read_print_rotation(pose, rig.dim)

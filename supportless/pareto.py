@@ -53,8 +53,8 @@ from .search import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance
 from .settings import SearchSettings
 from .symmetry import PoseLayout, require_mirror
 
-__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "NSGA_TIME_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front", "FrontPose",
-           "front_paths", "non_dominated", "pareto_front", "spread", "sweep_factors", "write_front"]
+__all__ = ["CANDIDATES_PER_SEARCH", "NSGA_SHARE", "NSGA_TIME_SHARE", "SAME_DEGREES", "SHORT_SHARE", "SPAN", "Front",
+           "FrontPose", "front_paths", "non_dominated", "pareto_front", "spread", "sweep_factors", "write_front"]
 
 #: The distortion weights are swept from 1/SPAN to SPAN times the default.
 SPAN = 4.0
@@ -133,7 +133,8 @@ class Front:
     def summary(self) -> list[str]:
         """One line per pose and one for the time."""
         return [f"front pose {k}: support {p.support:.4g}, distortion {p.distortion:.3g}"
-                for k, p in enumerate(self.poses, 1)] + [f"the front took {self.seconds:.1f} s ({len(self.poses)} poses)"]
+                for k, p in enumerate(self.poses, 1)] + [
+            f"the front took {self.seconds:.1f} s ({len(self.poses)} poses)"]
 
 
 def sweep_factors(count: int) -> np.ndarray:
