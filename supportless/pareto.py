@@ -376,7 +376,7 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
             if rig.dim == 3 and self_intersects(rig.pose(A[k]), rig.faces):
                 distinct.remove(k)  # the exact check: drop it and choose again
                 break
-            source = min(found.values(), key=lambda r: abs(np.log(r.settings.w_arap / base.w_arap / F[k])))
+            source = found[min(found, key=lambda i: abs(np.log(factors[i] / F[k])))]  # the search it came from
             front.append(FrontPose(measured_at(rig, source, A[k], R[k], objective), float(F[k]),
                                    float(support[k]), float(distortion[k])))
         else:
