@@ -308,7 +308,7 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
         The single search's settings (default: the tool's defaults); its
         distortion weights are the sweep's middle.
     count : int
-        How many searches, and at most how many poses come back.
+        At most how many poses come back (and, for ``sweep``, how many searches).
     callback : callable, optional
         ``callback(done, count, result)`` after each search.
     per_search : int
@@ -319,8 +319,9 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
         under way and the sweep (a stop button).
     method : {"nsga2", "sweep"}
         ``nsga2`` (the default): the default weights' search, then pymoo's
-        NSGA-II seeded with its poses for ``SHORT_SHARE`` times its
-        evaluations; its final population joins the pool. ``sweep``: the
+        NSGA-II seeded with its poses for :data:`NSGA_SHARE` times its
+        evaluations (at most :data:`NSGA_TIME_SHARE` times its time); its
+        final population joins the pool. ``sweep``: the
         weight sweep above. On the zoo the NSGA-II front has the larger
         hypervolume in less time (benchmarks/RESULTS.md, "A front of poses").
 
@@ -368,19 +369,28 @@ def pareto_front(rig: Rig, settings: SearchSettings | None = None, count: int = 
     for k in idx:
         if all(pose_distance_deg(A[k], R[k], A[j], R[j]) >= SAME_DEGREES for j in distinct):
             distinct.append(int(k))
-    front: list[FrontPose] = []
-    while distinct and len(front) < count:
+    if rig.dim == 3:  # the exact check, only on the poses that could be chosen, each once
+        clean: dict[int, bool] = {}
+
+        def intersects(k):
+            if k not in clean:
+                clean[k] = not self_intersects(rig.pose(A[k]), rig.faces)
+            return not clean[k]
+    else:
+        def intersects(k):
+            return False
+    pick = []
+    while distinct:
         pick = [distinct[j] for j in spread(np.column_stack([support[distinct], distortion[distinct]]), count)]
-        front = []
-        for k in pick:
-            if rig.dim == 3 and self_intersects(rig.pose(A[k]), rig.faces):
-                distinct.remove(k)  # the exact check: drop it and choose again
-                break
-            source = found[min(found, key=lambda i: abs(np.log(factors[i] / F[k])))]  # the search it came from
-            front.append(FrontPose(measured_at(rig, source, A[k], R[k], objective), float(F[k]),
-                                   float(support[k]), float(distortion[k])))
-        else:
+        bad = [k for k in pick if intersects(k)]
+        if not bad:
             break
+        distinct = [k for k in distinct if k not in bad]  # drop them and choose again
+    front = []
+    for k in pick:
+        source = found[min(found, key=lambda i: abs(np.log(factors[i] / F[k])))]  # the search it came from
+        front.append(FrontPose(measured_at(rig, source, A[k], R[k], objective), float(F[k]), float(support[k]),
+                               float(distortion[k])))
     return Front(front, found[middle], time.perf_counter() - t0)
 
 

@@ -11,8 +11,8 @@ print rotation: two more variables in 3D, one in 2D, in a second swarm, see
 
 from __future__ import annotations
 
-import time
 import dataclasses
+import time
 from dataclasses import dataclass, field
 from typing import Callable
 

@@ -72,29 +72,34 @@ random_text = st.lists(st.sampled_from(list("0123456789 .-e#\nnaf/v\t") + ["\ufe
                        max_size=120).map("".join)
 
 
+def _holds(points, indices, width):
+    """``points`` (n, 3) finite and ``indices`` (k >= 1, width) into them."""
+    assert points.ndim == 2 and points.shape[1] == 3 and np.isfinite(points).all()
+    assert indices.ndim == 2 and indices.shape[1] == width and len(indices)
+    assert indices.min() >= 0 and indices.max() < len(points)
+
+
+def _read_text(folder, name, text, read):
+    path = folder / name
+    path.write_text(text, encoding="utf-8")
+    return _one_line_error(path, read)
+
+
 @FUZZ
 @given(text=st.one_of(_mutations(VALID_TGF), random_text))
 def test_tgf_reader(tmp_path, text):
-    path = tmp_path / "s.tgf"
-    path.write_text(text, encoding="utf-8")
-    out = _one_line_error(path, sl.read_tgf)
+    out = _read_text(tmp_path, "s.tgf", text, sl.read_tgf)
     if out is not None:
-        J, B = out
-        assert J.ndim == 2 and J.shape[1] == 3 and np.isfinite(J).all()
-        assert B.ndim == 2 and B.shape[1] == 2 and len(B) and B.min() >= 0 and B.max() < len(J)
-        check_skeleton(J, B)  # a tree with lengths: no error
+        _holds(*out, 2)
+        check_skeleton(*out)  # a tree with lengths: no error
 
 
 @FUZZ
 @given(text=st.one_of(_mutations(VALID_OBJ), random_text))
 def test_obj_reader(tmp_path, text):
-    path = tmp_path / "m.obj"
-    path.write_text(text, encoding="utf-8")
-    out = _one_line_error(path, sl.read_mesh)
+    out = _read_text(tmp_path, "m.obj", text, sl.read_mesh)
     if out is not None:
-        V, F = out
-        assert V.ndim == 2 and V.shape[1] == 3 and np.isfinite(V).all()
-        assert F.ndim == 2 and F.shape[1] == 3 and len(F) and F.min() >= 0 and F.max() < len(V)
+        _holds(*out, 3)
 
 
 def _binary_stl() -> bytes:
@@ -114,8 +119,7 @@ def test_binary_stl_reader(tmp_path, cut, flips):
     path.write_bytes(bytes(data[: len(data) - cut]))
     out = _one_line_error(path, sl.read_mesh)
     if out is not None:
-        V, F = out
-        assert np.isfinite(V).all() and len(F) and F.min() >= 0 and F.max() < len(V)
+        _holds(*out, 3)
 
 
 json_values = st.recursive(st.none() | st.booleans() | st.floats(allow_nan=True) | st.integers() | st.text(max_size=5),
@@ -156,4 +160,4 @@ def test_glb_reader(tmp_path, fox_bytes, cut, flips):
     path.write_bytes(bytes(data[: len(data) - cut]))
     out = _one_line_error(path, read_gltf_skin)
     if out is not None:
-        assert np.isfinite(out.vertices).all() and out.faces.min() >= 0 and out.faces.max() < len(out.vertices)
+        _holds(out.vertices, out.faces, 3)
