@@ -523,8 +523,18 @@ def view(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, dem
 @click.option("--particles", default=200, show_default=True, type=click.IntRange(2, None))
 @click.option("--iterations", default=120, show_default=True, type=click.IntRange(1, None))
 @click.option("--backend", type=click.Choice(["fast", "numpy", "both"]), default="both", show_default=True)
-def bench(model, skeleton, up, particles, iterations, backend):
+@click.option("--targets", is_flag=True,
+              help="Instead: the speed targets of big rigs (bunny, bb-bunny, a 68-bone character, the glTF robot, "
+                   "a 111k-triangle bunny), each prepared and searched in its own process.")
+@click.option("--reference", is_flag=True, help="With --targets: also search the full surface of the cases "
+                                                "that have a simplified proxy (slow).")
+def bench(model, skeleton, up, particles, iterations, backend, targets, reference):
     """Time preparation, one pose, one swarm iteration and a whole search."""
+    if targets:
+        from .bench_targets import run_targets
+
+        rows = run_targets(reference=reference, echo=click.echo)
+        sys.exit(1 if any("error" in r and not r.get("missing") for r in rows) else 0)
     from .bench import run_bench
 
     run_bench(model, skeleton, up, particles=particles, iterations=iterations, backend=backend,

@@ -96,6 +96,11 @@ class Objective:
     support_floor : float
         Fixed cost of support however low it is, as a height added to every
         prism, in units of the model's rest height (the ``prism`` model).
+    volume : float, optional
+        The volume the distortion and intersection terms are divided by
+        (default: the rig's rest volume). A simplified proxy of a dense
+        surface is given the full surface's, so its terms are those of the
+        model it stands for (:meth:`supportless.rig.Rig.coarse_rig`).
 
     Poses that break a hard rule (a joint limit, or standing) get the value
     ``INFEASIBLE + violation``: worse than any pose that keeps the rules, and
@@ -106,7 +111,8 @@ class Objective:
                  w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
                  clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
-                 joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0):
+                 joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
+                 volume: float | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -125,6 +131,8 @@ class Objective:
         self.w_prior = float(w_prior)
         self.keep_standing = bool(keep_standing)
         self.support_floor = float(support_floor)
+        if volume is not None:
+            self.__dict__["volume"] = float(volume)  # fills the cached property below
         self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
 
     # ------------------------------------------------------------ precompute

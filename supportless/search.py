@@ -444,8 +444,10 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     settings = (settings or SearchSettings()).replace(**changes)
     coarse = rig.coarse_rig() if objective is None else None
     if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
-        found = _optimize(coarse, settings, start=start, start_rotation=start_rotation, callback=callback)
-        return _on_full_surface(rig, found, settings.objective(rig), t0)
+        full = settings.objective(rig)
+        found = _optimize(coarse, settings, objective=settings.objective(coarse, volume=full.volume), start=start,
+                          start_rotation=start_rotation, callback=callback)
+        return _on_full_surface(rig, found, full, t0)
     if objective is None:
         objective = settings.objective(rig)
     base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
@@ -669,8 +671,32 @@ def measured_at(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.n
                                print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
 
 
+#: How many of a proxy search's candidates are checked for exact intersections on the full surface at most.
+FULL_CHECKS = 10
+
+
 def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
-    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface."""
-    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value))
-    measured = measured_at(rig, found, found.angles, found.rotation, objective)
+    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface.
+
+    With exact intersection checks, the full surface passes them too: when the
+    found pose's full surface touches itself where the proxy did not, the best
+    of the search's next :data:`FULL_CHECKS` candidates whose full surface is
+    clear is taken (``stats["full_exact_calls"]`` counts the checks; the rest
+    pose is the last resort).
+    """
+    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value),
+                 full_exact_calls=0)
+    angles, rotation = found.angles, found.rotation
+    if found.settings.exact_intersections and rig.dim == 3:
+        options = [(angles, rotation)]
+        for a, q in zip(found.candidates.get("angles", []), found.candidates.get("rotations", [])):
+            if len(options) < FULL_CHECKS and not any(np.array_equal(a, b) and np.array_equal(q, r)
+                                                      for b, r in options):  # copies of one pose once
+                options.append((a, q))
+        for a, q in options + [(np.zeros_like(angles), rotation)]:
+            stats["full_exact_calls"] += 1
+            if not self_intersects(rig.pose(a), rig.faces):
+                angles, rotation = a, q
+                break
+    measured = measured_at(rig, found, angles, rotation, objective)
     return dataclasses.replace(measured, stats=stats, runtime_seconds=time.perf_counter() - t0)

@@ -227,7 +227,7 @@ class SearchSettings:
         """A copy with some settings changed (``None`` values are ignored)."""
         return dataclasses.replace(self, **{k: v for k, v in changes.items() if v is not None})
 
-    def objective(self, rig: Rig, arap_data=None) -> Objective:
+    def objective(self, rig: Rig, arap_data=None, volume: float | None = None) -> Objective:
         """The objective the search minimises for ``rig``.
 
         Parameters
@@ -236,6 +236,9 @@ class SearchSettings:
         arap_data : supportless.energies.arap.ArapData, optional
             Precomputed ARAP operators of ``rig`` to share (they depend on the
             rig and ``clusters`` only).
+        volume : float, optional
+            The normalising volume (:class:`~supportless.objective.Objective`;
+            default: the rig's).
 
         Returns
         -------
@@ -245,7 +248,7 @@ class SearchSettings:
                          overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
-                         keep_standing=self.keep_standing, support_floor=self.support_floor)
+                         keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.

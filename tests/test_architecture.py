@@ -99,7 +99,7 @@ LAYERS = [
     {"supportless.settings"},
     {"supportless.search"},
     {"supportless.render", "supportless.report"},
-    {"supportless.slicer", "supportless.bench"},
+    {"supportless.slicer", "supportless.bench", "supportless.bench_targets"},
     {"supportless.ranking", "supportless.pareto", "supportless.batch"},
     {"supportless.cli_common"},
     {"supportless.cli_batch"},

@@ -76,8 +76,8 @@ def _segment_distance(p, a, b):
     return float(np.linalg.norm(p - (a + t * ab)))
 
 
-def _check_surface(V, F, J, B, genus=0):
-    """The geometric promises of a 3D figure."""
+def _check_surface(V, F, J, B, genus=0, clearance=0.5):
+    """The geometric promises of a 3D figure (``clearance``: the least distance of a joint to the skin)."""
     _, counts = edge_counts(F)
     assert np.all(counts == 2), "every edge shared by exactly two faces"
     directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
@@ -92,7 +92,7 @@ def _check_surface(V, F, J, B, genus=0):
     assert intersecting_face_pairs(V, F) == 0, "no self-intersections"
     # a sum of solid angles over a closed surface: 1 inside up to rounding (4e-16 measured)
     assert np.all(np.abs(igl.winding_number(V, F, J) - 1.0) < 1e-9), "every joint inside"
-    assert np.sqrt(igl.point_mesh_squared_distance(J, V, F)[0]).min() > 0.5, "joints clear of the skin"
+    assert np.sqrt(igl.point_mesh_squared_distance(J, V, F)[0]).min() > clearance, "joints clear of the skin"
     assert np.all(np.abs(igl.winding_number(V, F, _bone_points(J, B)) - 1.0) < 1e-9), "bones inside"
     assert V[:, 1].min() == 0.0, "rests on y = 0"
 
@@ -341,3 +341,21 @@ def test_woody2d_vertices_on_joints_and_bones():
     b, bc = igl.boundary_conditions(V3, F, J3, np.zeros(0, dtype=np.int64), B)
     assert bc.shape[1] == len(B)
     assert len(b) >= len(J) + 5 * len(B)
+
+
+# --- the big character of the speed benchmark ------------------------------------------------------------------
+
+
+def test_the_benchmark_character_is_a_big_clean_rig():
+    """``supportless bench --targets``' character: a game-sized rig (60+ bones) on a surface dense enough for the proxy."""
+    from supportless.rig import PROXY_FACES
+    from supportless.shapes.character import character
+
+    V, F, J, B = character()
+    assert len(B) == 68 and len(F) > PROXY_FACES
+    assert _is_forest(len(J), B)
+    assert set(np.unique(B).tolist()) == set(range(len(J)))
+    _check_surface(V, F, J, B, clearance=0.05)  # fingertip joints sit 0.08 inside thin fingertips
+    # fingers are chains of four bones from the palm, five per hand
+    palms = [i for i in range(len(J)) if np.sum(B[:, 0] == i) == 5]
+    assert len(palms) == 2
