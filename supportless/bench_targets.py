@@ -53,8 +53,7 @@ def _missing(case: str) -> str | None:
 
 def _prepare(case: str, cache_dir: str):
     """The rig of a case, prepared into ``cache_dir``."""
-    from . import load_rig
-    from .rig import prepare_rig
+    from .rig import load_rig, prepare_rig
 
     if case == "character":
         from .shapes.character import character
