@@ -678,11 +678,9 @@ FULL_CHECKS = 10
 def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
     """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface.
 
-    With exact intersection checks, the full surface passes them too: when the
-    found pose's full surface touches itself where the proxy did not, the best
-    of the search's next :data:`FULL_CHECKS` candidates whose full surface is
-    clear is taken (``stats["full_exact_calls"]`` counts the checks; the rest
-    pose is the last resort).
+    With exact intersection checks the full surface passes them too: else the
+    best clear one of the next :data:`FULL_CHECKS` candidates is taken, the
+    rest pose last (``stats["full_exact_calls"]`` counts the checks).
     """
     stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value),
                  full_exact_calls=0)
