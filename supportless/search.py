@@ -346,8 +346,8 @@ class PoseResult:
     candidates : dict
         Other good poses the last phase of the search reached, best first:
         ``angles`` (q, m, 3) float64, ``rotations`` (q, d, d) float64 and
-        ``values`` (q,) float64 (objective values; not checked for exact
-        self-intersection). See :func:`distinct_candidates`.
+        ``values`` (q,) float64 (objective values as the search measured them, :meth:`Objective.bounded`;
+        not checked for exact self-intersection). See :func:`distinct_candidates`.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.build_report`): it measures the rest pose and
@@ -543,8 +543,9 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     rotation = to_rotation(swarm.x)
     candidates = _candidates(swarm, to_angles, to_rotation)
     posed = place_on_plate(rig.pose(angles), rig.up)
-    terms = {key: float(v) for key, v in objective.terms(angles, rotation if turned else None).items()}
-    return PoseResult(angles=angles, vertices=posed, value=float(swarm.value), history=np.asarray(history),
+    value, terms, _ = objective.evaluate(angles, rotation if turned else None)  # the rig's own weights
+    terms = {key: float(v) for key, v in terms.items()}
+    return PoseResult(angles=angles, vertices=posed, value=float(value), history=np.asarray(history),
                       terms=terms, settings=settings, objective=objective, interrupted=swarm.interrupted,
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
                       stats=stats, rotation=rotation,
@@ -682,8 +683,7 @@ def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: floa
     best clear one of the next :data:`FULL_CHECKS` candidates is taken, the
     rest pose last (``stats["full_exact_calls"]`` counts the checks).
     """
-    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=float(found.value),
-                 full_exact_calls=0)
+    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=found.value, full_exact_calls=0)
     angles, rotation = found.angles, found.rotation
     if found.settings.exact_intersections and rig.dim == 3:
         options = [(angles, rotation)]

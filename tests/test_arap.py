@@ -265,3 +265,21 @@ def test_bad_shapes(bar):
         arap_energy(data, np.zeros((2, W.shape[1] + 1, 3, 4)))
     with pytest.raises(ValueError):
         arap_precompute(V, T[:, :3], W)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 7])
+def test_the_fast_kmeans_seeds_are_scipys(seed):
+    """The running-minimum k-means++ picks scipy's seeds from the same generator: the same clusters, faster."""
+    import warnings
+
+    from scipy.cluster.vq import kmeans2
+
+    from supportless.energies.arap import _kmeans_pp
+
+    data = np.random.default_rng(seed).dirichlet(np.full(9, 0.3), size=700)  # mean weight vectors
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        codes, labels = kmeans2(data, 40, minit="++", rng=np.random.default_rng(seed))
+        fast_codes, fast_labels = kmeans2(data, _kmeans_pp(data, 40, np.random.default_rng(seed)), minit="matrix")
+    np.testing.assert_array_equal(fast_labels, labels)
+    np.testing.assert_array_equal(fast_codes, codes)

@@ -158,8 +158,12 @@ def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
     A = random_angles(rig, 40, scale=1.2, seed=7)
     exact = obj(A)
     bound = np.where(np.arange(40) % 2 == 0, np.inf, np.median(exact))
+    searched = obj.bounded(A, bound)  # posed with the search's pruned weights: close to the rig's own
+    obj.__dict__["search_lbs"] = rig.lbs  # the same weights as obj(A): the bound logic alone
     got = obj.bounded(A, bound)
     below = exact < bound
     np.testing.assert_allclose(got[below], exact[below], rtol=1e-12)
     assert np.all(got[~below] >= bound[~below])
     assert np.all(got <= exact + 1e-12)  # a lower bound everywhere
+    np.testing.assert_allclose(searched[below], exact[below], rtol=1e-3)
+    assert not np.array_equal(searched[below], exact[below])

@@ -239,7 +239,8 @@ def test_orient_keep_is_the_pose_only_search(branch_rig):
                            layout.upper, particles=16, iterations=8, rng=np.random.default_rng(5),
                            initial=np.zeros((1, layout.count)), pass_bound=True, **PSO_PRESETS["standard"])
     np.testing.assert_array_equal(kept.angles, layout.to_angles(swarm.x[None])[0])
-    assert kept.value == swarm.value
+    # the swarm poses with the search's pruned weights; the result is measured with the rig's own
+    assert kept.value == float(objective(kept.angles)) == pytest.approx(swarm.value, rel=1e-4)
     np.testing.assert_array_equal(kept.rotation, np.eye(3))
     np.testing.assert_array_equal(kept.print_vertices, kept.vertices)
 
@@ -441,8 +442,8 @@ def test_search_result_carries_its_candidates_best_first(branch_rig):
     assert np.all(np.diff(c["values"]) >= 0)
     np.testing.assert_allclose(c["angles"][0], res.angles)
     assert c["values"][0] == pytest.approx(res.value)
-    # each candidate's value is its objective
+    # each candidate's value is its objective, as the search measured it (with its pruned skinning weights)
     for i in range(min(3, len(c["values"]))):
-        assert float(res.objective(c["angles"][i][None])[0]) == pytest.approx(c["values"][i], rel=1e-9)
+        assert float(res.objective(c["angles"][i][None])[0]) == pytest.approx(c["values"][i], rel=1e-4)
     kept = distinct_candidates(c, 3, tolerance=10.0)
     assert kept[0] == 0 and len(set(kept)) == len(kept)

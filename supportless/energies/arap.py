@@ -43,6 +43,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
 from scipy.cluster.vq import kmeans2
+from scipy.spatial.distance import cdist
 
 __all__ = [
     "ArapData",
@@ -147,8 +148,38 @@ def _cluster_elements(mean_weights: np.ndarray, clusters, rng) -> np.ndarray:
     with warnings.catch_warnings():
         # Empty clusters are harmless: labels are compacted below.
         warnings.simplefilter("ignore")
-        _, labels = kmeans2(mean_weights, g, minit="++", rng=rng)
+        _, labels = kmeans2(mean_weights, _kmeans_pp(mean_weights, g, rng), minit="matrix")
     return np.unique(labels, return_inverse=True)[1].astype(np.int64)
+
+
+def _kmeans_pp(data, g, rng):
+    """k-means++ seeds, as ``scipy.cluster.vq.kmeans2(minit="++")`` picks them, in O(k g m) instead of O(k g² m).
+
+    Each new seed's squared distances are folded into a running minimum
+    instead of measuring every seed again: the same numbers, so the same seeds
+    from the same ``rng`` (checked in the tests); with many bones (m = 68, 28k
+    tets) this took 10 s of a 32 s search.
+
+    Parameters
+    ----------
+    data : (k, m) float64
+    g : int
+        Number of seeds, ``g <= k``.
+    rng : numpy.random.Generator
+
+    Returns
+    -------
+    seeds : (g, m) float64
+    """
+    seeds = np.empty((g, data.shape[1]))
+    seeds[0] = data[rng.integers(0, data.shape[0], dtype=np.int64)]
+    d2 = None
+    for i in range(1, g):
+        new = cdist(seeds[i - 1:i], data, metric="sqeuclidean")[0]
+        d2 = new if d2 is None else np.minimum(d2, new)
+        cumulative = (d2 / d2.sum()).cumsum()
+        seeds[i] = data[int(np.searchsorted(cumulative, rng.uniform()))]
+    return seeds
 
 
 def arap_precompute(vertices, elements, weights, clusters=100, rng=None) -> ArapData:
