@@ -39,8 +39,8 @@ from .prior import PosePrior
 from .rig import Rig
 from .standing import Standing
 
-__all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT", "W_OVERHANG",
-           "W_PRIOR"]
+__all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT",
+           "W_OVERHANG", "W_PRIOR"]
 
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
@@ -58,6 +58,10 @@ OVERHANG_MODELS = ("prism", "column", "slicer")
 #: :meth:`Objective.bounded` only): on the zoo, the bunny and a 68-bone character, random poses within 40° then
 #: move no vertex by more than 0.012 % of the model's height, and skinning costs 1.6-5x less.
 SEARCH_WEIGHT_FLOOR = 1e-4
+
+#: :meth:`Objective.bounded` measures larger batches in chunks of this many poses: the default swarm (200)
+#: in one; a swarm of 5000 on the bunny peaks at 298 MB instead of 1059 MB (``benchmarks/memory.py``).
+POSE_CHUNK = 256
 
 #: Printed height (mm) at which the ``slicer`` overhang model measures a pose (as the report does).
 SLICER_MODEL_HEIGHT_MM = 60.0
@@ -279,9 +283,11 @@ class Objective:
         What the search minimises: posed with :attr:`search_lbs` (the other
         methods pose with the rig's own weights). The self-intersection term is
         never negative, so a pose whose distortion and overhang terms alone
-        reach its bound cannot beat it; the
-        (expensive) intersection term is computed only for the others. The
-        swarm passes each particle's best value as its bound.
+        reach its bound cannot beat it; the (expensive) intersection term is
+        computed only for the others. The swarm passes each particle's best
+        value as its bound. A batch larger than :data:`POSE_CHUNK` is measured
+        in chunks of that size (the same values; memory no longer grows with
+        the swarm).
 
         Parameters
         ----------
@@ -296,10 +302,15 @@ class Objective:
             The objective where it is below ``bound``; elsewhere a lower bound
             of it that is at least ``bound``.
         """
+        bound = np.broadcast_to(np.asarray(bound, np.float64), (len(angles),))
+        if len(angles) > POSE_CHUNK:
+            return np.concatenate([self.bounded(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
+                                                None if rotations is None else rotations[i:i + POSE_CHUNK])
+                                   for i in range(0, len(angles), POSE_CHUNK)])
         transforms, V = self._posed(angles, search=True)
         partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}
         values = np.array(self.combine(self.normalise(partial)), np.float64)
-        todo = np.flatnonzero(values < np.asarray(bound))
+        todo = np.flatnonzero(values < bound)
         if len(todo) and self.w_intersect != 0:
             values[todo] += self.w_intersect * np.asarray(self._intersection(V[todo])) / self.volume
         return values

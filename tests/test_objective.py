@@ -167,3 +167,18 @@ def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
     assert np.all(got <= exact + 1e-12)  # a lower bound everywhere
     np.testing.assert_allclose(searched[below], exact[below], rtol=1e-3)
     assert not np.array_equal(searched[below], exact[below])
+
+
+def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
+    from supportless import objective as objective_mod
+
+    obj = sl.Objective(rig)
+    A = random_angles(rig, 23, scale=0.8, seed=3)
+    bound = np.where(np.arange(23) % 3 == 0, 0.0, np.inf)
+    whole = obj.bounded(A, bound)
+    sizes = []
+    posed = obj._posed
+    monkeypatch.setattr(objective_mod, "POSE_CHUNK", 5)
+    monkeypatch.setattr(obj, "_posed", lambda angles, search=False: sizes.append(len(angles)) or posed(angles, search))
+    np.testing.assert_array_equal(obj.bounded(A, bound), whole)
+    assert sizes == [5, 5, 5, 5, 3]
