@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .energies.exact import broad_phase_groups, self_intersects
+from .energies.exact import self_intersects
 from .geometry import place_on_plate, print_pose
 from .interrupt import deferred_interrupt, requested
 from .kinematics import euler_to_matrix
@@ -301,6 +301,9 @@ def _reject_infeasible(values, X, threshold, feasible, skip=0):
         values[i] = np.inf
 
 
+# --------------------------------------------------------------------------- #
+# pose search
+# --------------------------------------------------------------------------- #
 @dataclass
 class PoseResult:
     """Outcome of :func:`optimize`.
@@ -474,10 +477,8 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
 
     feasible = None
     if settings.exact_intersections and rig.dim == 3:
-        groups = broad_phase_groups(rig.vertices, rig.faces, rig.weights)  # rigid parts: fewer faces to CGAL
-
         def no_intersection(x):
-            return not self_intersects(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces, groups)
+            return not self_intersects(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces)
 
         feasible = _Timed(no_intersection, stats, "exact")
 

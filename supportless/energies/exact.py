@@ -11,8 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["broad_phase_groups", "faces_that_can_meet", "intersecting_faces", "intersecting_face_pairs",
-           "rigid_face_groups", "self_intersects"]
+__all__ = ["intersecting_faces", "intersecting_face_pairs", "self_intersects"]
 
 
 def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -59,7 +58,7 @@ def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:
     return int(len(intersecting_faces(vertices, faces)))
 
 
-def self_intersects(vertices: np.ndarray, faces: np.ndarray, groups: np.ndarray | None = None) -> bool:
+def self_intersects(vertices: np.ndarray, faces: np.ndarray) -> bool:
     """Whether any two triangles intersect (CGAL's exact predicates), stopping at the first pair found.
 
     Half the time of :func:`intersecting_faces` on a surface that does
@@ -70,85 +69,12 @@ def self_intersects(vertices: np.ndarray, faces: np.ndarray, groups: np.ndarray 
     ----------
     vertices : (n, 3) float64
     faces : (f, 3) int64
-    groups : (f,) int64, optional
-        Rigid parts (:func:`rigid_face_groups`) of a surface whose rest pose
-        does not intersect itself: then only the faces that can meet another
-        part (:func:`faces_that_can_meet`) go to CGAL, with the same answer.
 
     Returns
     -------
     intersects : bool
     """
-    if groups is not None:
-        faces = np.asarray(faces)[faces_that_can_meet(vertices, faces, groups)]
-        if len(faces) < 2:
-            return False
     return len(_detect(vertices, faces, first_only=True)) > 0
-
-
-def rigid_face_groups(weights: np.ndarray, faces: np.ndarray, tol: float = 1e-9) -> np.ndarray:
-    """The bone each triangle follows rigidly, or -1.
-
-    A triangle whose three vertices all have weight 1 (within ``tol``) on one
-    bone moves rigidly with it: two such triangles of the same bone keep
-    their rest relation in every pose, so if they did not intersect at rest
-    they never do. Game characters skinned part by part (a robot, armour) are
-    mostly rigid parts; bounded biharmonic weights blend everywhere, and
-    their triangles are -1.
-
-    Parameters
-    ----------
-    weights : (n, m) float64
-        Skinning weights of the surface vertices.
-    faces : (f, 3) int64
-
-    Returns
-    -------
-    groups : (f,) int64
-        The bone, or -1 for a triangle that blends bones.
-    """
-    W = np.asarray(weights, np.float64)
-    bone = np.argmax(W, axis=1)
-    rigid = W[np.arange(len(W)), bone] >= 1.0 - tol
-    F = np.asarray(faces, np.int64)
-    same = rigid[F].all(axis=1) & (bone[F[:, 0]] == bone[F[:, 1]]) & (bone[F[:, 0]] == bone[F[:, 2]])
-    return np.where(same, bone[F[:, 0]], -1).astype(np.int64)
-
-
-def faces_that_can_meet(vertices: np.ndarray, faces: np.ndarray, groups: np.ndarray) -> np.ndarray:
-    """The triangles that may intersect another one, given rigid parts (a broad phase).
-
-    Every blending triangle (group -1), and every rigid one whose bounding box
-    overlaps the bounding box of another group's triangles (a rigid part's
-    triangles cannot intersect each other, see :func:`rigid_face_groups`).
-    Two intersecting triangles have overlapping boxes, so every intersecting
-    pair has both triangles in the result.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-    faces : (f, 3) int64
-    groups : (f,) int64
-
-    Returns
-    -------
-    kept : (q,) int64
-        Indices into ``faces``, increasing.
-    """
-    T = np.asarray(vertices, np.float64)[np.asarray(faces, np.int64)]
-    lo, hi = T.min(axis=1), T.max(axis=1)
-    labels, inverse = np.unique(groups, return_inverse=True)
-    g = len(labels)
-    glo = np.full((g, 3), np.inf)
-    ghi = np.full((g, 3), -np.inf)
-    np.minimum.at(glo, inverse, lo)
-    np.maximum.at(ghi, inverse, hi)
-    # faces x groups box overlap, one group at a time (g is at most the bone count + 1)
-    meets = groups < 0
-    for k in range(g):
-        overlap = np.all((lo <= ghi[k]) & (hi >= glo[k]), axis=1) & (inverse != k)
-        meets |= overlap
-    return np.flatnonzero(meets)
 
 
 def _detect(vertices, faces, first_only: bool) -> np.ndarray:
@@ -162,27 +88,3 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
     out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True,
                                                        first_only=first_only)
     return np.asarray(out[2], np.int64).reshape(-1, 2)
-
-
-def broad_phase_groups(vertices: np.ndarray, faces: np.ndarray, weights: np.ndarray) -> np.ndarray | None:
-    """The ``groups`` to give :func:`self_intersects` for the poses of a rig, or None when they cannot help.
-
-    None when no triangle is rigid, or when the rest surface (``vertices``)
-    intersects itself (then a rigid part may already hold an intersecting
-    pair, which the broad phase would skip).
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-        Rest surface.
-    faces : (f, 3) int64
-    weights : (n, m) float64
-
-    Returns
-    -------
-    groups : (f,) int64 or None
-    """
-    groups = rigid_face_groups(weights, faces)
-    if np.all(groups < 0) or self_intersects(vertices, faces):
-        return None
-    return groups
