@@ -679,19 +679,19 @@ FULL_CHECKS = 10
 def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
     """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface.
 
-    With exact intersection checks the full surface passes them too: else the
-    best clear one of the next :data:`FULL_CHECKS` candidates is taken, the
-    rest pose last (``stats["full_exact_calls"]`` counts the checks).
+    The proxy's best and other good poses are re-scored on the full surface; with exact intersection checks the
+    best of the first :data:`FULL_CHECKS` whose full surface is clear is taken, the rest pose last.
     """
     stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=found.value, full_exact_calls=0)
-    angles, rotation = found.angles, found.rotation
+    A = np.concatenate([found.angles[None], found.candidates.get("angles", np.zeros((0,) + found.angles.shape))])
+    Q = np.concatenate([found.rotation[None], found.candidates.get("rotations", np.zeros((0,) + found.rotation.shape))])
+    first = sorted({a.tobytes() + q.tobytes(): i for i, (a, q) in reversed(list(enumerate(zip(A, Q))))}.values())
+    order = np.argsort(np.asarray(objective(A[first], Q[first])), kind="stable")  # copies of a pose once
+    A, Q = A[first][order], Q[first][order]
+    stats["full_rescored"] = len(A)
+    angles, rotation = A[0], Q[0]
     if found.settings.exact_intersections and rig.dim == 3:
-        options = [(angles, rotation)]
-        for a, q in zip(found.candidates.get("angles", []), found.candidates.get("rotations", [])):
-            if len(options) < FULL_CHECKS and not any(np.array_equal(a, b) and np.array_equal(q, r)
-                                                      for b, r in options):  # copies of one pose once
-                options.append((a, q))
-        for a, q in options + [(np.zeros_like(angles), rotation)]:
+        for a, q in [*zip(A[:FULL_CHECKS], Q[:FULL_CHECKS]), (np.zeros_like(angles), Q[0])]:
             stats["full_exact_calls"] += 1
             if not self_intersects(rig.pose(a), rig.faces):
                 angles, rotation = a, q

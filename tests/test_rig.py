@@ -440,10 +440,11 @@ def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branc
     np.testing.assert_allclose(result.vertices, sl.geometry.place_on_plate(rig.pose(result.angles), rig.up))
 
 
-#: What the proxy's terms may differ from the full surface's (the bound benchmarks/RESULTS.md states, measured on
-#: the 68-bone character and the 111k-triangle bunny): the support estimate and the distortion term relatively,
-#: the self-intersection term as a share of the volume.
-PROXY_BOUND = {"overhang": 0.05, "arap": 0.02, "intersection": 2e-3}
+#: What the proxy's terms may differ from the full surface's, as benchmarks/RESULTS.md states it (measured on
+#: the 68-bone character and the 111k-triangle bunny, 30 random poses within 20° of rest: 0.034 and 0.054 of the
+#: overhang term, 1.0e-3 and 0.8e-3 of the volume): the overhang term (support over the rest pose's) and the
+#: self-intersection term (a share of the volume) within these, the distortion term the same (one volume mesh).
+PROXY_BOUND = {"overhang": 0.06, "intersection": 2e-3}
 
 
 def test_the_proxy_and_the_full_surface_agree_within_the_stated_bound(dense_branch):
@@ -456,12 +457,11 @@ def test_the_proxy_and_the_full_surface_agree_within_the_stated_bound(dense_bran
     full = settings.objective(rig)
     proxy = settings.objective(coarse, volume=full.volume).terms(A)  # as the search measures the proxy
     full = full.terms(A)
-    for key in ("overhang", "arap"):
-        ok = full[key] > 1e-9
-        assert ok.sum() >= 4
-        np.testing.assert_array_less(np.abs(proxy[key][ok] / full[key][ok] - 1.0), PROXY_BOUND[key], err_msg=key)
+    np.testing.assert_array_less(np.abs(proxy["overhang"] - full["overhang"]), PROXY_BOUND["overhang"])
+    assert np.ptp(full["overhang"]) > 5 * PROXY_BOUND["overhang"]  # poses that differ more than the bound
     np.testing.assert_array_less(np.abs(proxy["intersection"] - full["intersection"]), PROXY_BOUND["intersection"])
     assert full["intersection"].max() > 0  # the last pose does overlap: the check compares something
+    np.testing.assert_allclose(proxy["arap"], full["arap"], rtol=1e-9, atol=1e-15)
 
 
 def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_clear_one(dense_branch, monkeypatch):
@@ -488,3 +488,13 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
     np.testing.assert_allclose(seen[1], rig.pose(result.angles))
     np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)
+
+
+def test_the_proxys_candidates_are_rescored_on_the_full_surface(dense_branch):
+    rig, _ = dense_branch
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", exact_intersections=False)
+    c = result.candidates  # the proxy's good poses, with the proxy's values
+    full = np.asarray(result.objective(c["angles"], c["rotations"]))
+    assert result.stats["full_rescored"] >= 2
+    assert result.value == pytest.approx(full.min(), rel=1e-12)  # the best of them on the full surface
+    assert result.value <= float(result.objective(c["angles"][0])) + 1e-12  # never worse than the proxy's best

@@ -21,6 +21,8 @@ The figures live in :mod:`~supportless.shapes.classic` (``tpose``, ``branch``,
 ``bird``, ``dragon``) and :mod:`~supportless.shapes.chains` (``arm``, ``tree``,
 ``hand``, ``tentacle``).  The builders of the new figures take an optional
 ``seed`` that varies their proportions; :func:`demo_figure` uses the default.
+:mod:`~supportless.shapes.character` builds the 68-bone, dense character of
+``supportless bench --targets``; it is not one of the zoo's figures.
 """
 
 from __future__ import annotations
