@@ -97,7 +97,7 @@ LAYERS = [
     {"supportless.standing", "supportless.prior", "supportless.symmetry", "supportless.orientation"},
     {"supportless.objective"},
     {"supportless.settings"},
-    {"supportless.search"},
+    {"supportless.search", "supportless.candidates"},
     {"supportless.render", "supportless.report"},
     {"supportless.slicer", "supportless.bench", "supportless.bench_targets"},
     {"supportless.ranking", "supportless.pareto", "supportless.batch"},
