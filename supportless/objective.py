@@ -302,18 +302,37 @@ class Objective:
             The objective where it is below ``bound``; elsewhere a lower bound
             of it that is at least ``bound``.
         """
+        return self.bounded_overlap(angles, bound, rotations)[0]
+
+    def bounded_overlap(self, angles: np.ndarray, bound: np.ndarray,
+                        rotations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`bounded`, and the self-intersection volume it computed on the way.
+
+        Returns
+        -------
+        values : (P,) float64
+            As :meth:`bounded`.
+        overlap : (P,) float64
+            The ray grid's self-intersection volume where it was computed, 0
+            elsewhere. A closed surface that does not intersect itself is
+            nowhere two layers deep, so a volume above rounding means the pose
+            does intersect itself (the search's exact gate skips CGAL there).
+        """
         bound = np.broadcast_to(np.asarray(bound, np.float64), (len(angles),))
         if len(angles) > POSE_CHUNK:
-            return np.concatenate([self.bounded(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
-                                                None if rotations is None else rotations[i:i + POSE_CHUNK])
-                                   for i in range(0, len(angles), POSE_CHUNK)])
+            parts = [self.bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
+                                          None if rotations is None else rotations[i:i + POSE_CHUNK])
+                     for i in range(0, len(angles), POSE_CHUNK)]
+            return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
         transforms, V = self._posed(angles, search=True)
         partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}
         values = np.array(self.combine(self.normalise(partial)), np.float64)
+        overlap = np.zeros(len(values))
         todo = np.flatnonzero(values < bound)
         if len(todo) and self.w_intersect != 0:
-            values[todo] += self.w_intersect * np.asarray(self._intersection(V[todo])) / self.volume
-        return values
+            overlap[todo] = self._intersection(V[todo])
+            values[todo] += self.w_intersect * overlap[todo] / self.volume
+        return values, overlap
 
     def __call__(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
         """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""

@@ -182,3 +182,16 @@ def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch
     monkeypatch.setattr(obj, "_posed", lambda angles, search=False: sizes.append(len(angles)) or posed(angles, search))
     np.testing.assert_array_equal(obj.bounded(A, bound), whole)
     assert sizes == [5, 5, 5, 5, 3]
+
+
+def test_bounded_overlap_reports_the_intersection_volume_it_computed(rig):
+    obj = sl.Objective(rig)
+    obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
+    A = random_angles(rig, 30, scale=1.5, seed=11)
+    raw = obj.raw_terms(A)["intersection"]
+    assert np.count_nonzero(raw) >= 3  # some of these poses overlap
+    bound = np.where(np.arange(30) % 2 == 0, np.inf, -np.inf)  # every other pose cannot beat its bound
+    values, overlap = obj.bounded_overlap(A, bound)
+    np.testing.assert_array_equal(values, obj.bounded(A, bound))
+    np.testing.assert_array_equal(overlap[::2], raw[::2])
+    assert np.all(overlap[1::2] == 0)

@@ -447,3 +447,29 @@ def test_search_result_carries_its_candidates_best_first(branch_rig):
         assert float(res.objective(c["angles"][i][None])[0]) == pytest.approx(c["values"][i], rel=1e-4)
     kept = distinct_candidates(c, 3, tolerance=10.0)
     assert kept[0] == 0 and len(set(kept)) == len(kept)
+
+
+def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monkeypatch):
+    """An embedded closed surface is nowhere two layers deep: such candidates are rejected without CGAL."""
+    from supportless import search as search_mod
+
+    rig = sl.load_rig("demo:tree")
+    asked = []
+    real = search_mod.self_intersects
+
+    def counted(V, F):
+        answer = real(V, F)
+        asked.append(answer)
+        return answer
+
+    monkeypatch.setattr(search_mod, "self_intersects", counted)
+    fast = sl.optimize(rig, particles=30, iterations=10, orient="keep")
+    fast_asked = list(asked)
+    asked.clear()
+    monkeypatch.setattr(search_mod, "OVERLAP_CERTAIN", np.inf)  # CGAL asked about every candidate
+    slow = sl.optimize(rig, particles=30, iterations=10, orient="keep")
+    assert fast.stats["overlap_rejections"] >= 3 and slow.stats["overlap_rejections"] == 0
+    assert len(asked) == len(fast_asked) + fast.stats["overlap_rejections"]
+    assert sum(asked) == sum(fast_asked) + fast.stats["overlap_rejections"]  # CGAL agreed: each one intersects
+    np.testing.assert_array_equal(fast.angles, slow.angles)
+    assert fast.value == slow.value
