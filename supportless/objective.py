@@ -284,8 +284,10 @@ class Objective:
         methods pose with the rig's own weights). The self-intersection term is
         never negative, so a pose whose distortion and overhang terms alone
         reach its bound cannot beat it; the (expensive) intersection term is
-        computed only for the others. The swarm passes each particle's best
-        value as its bound. A batch larger than :data:`POSE_CHUNK` is measured
+        computed only for the others; a pose past a joint limit is not
+        measured at all when its bound keeps the rules (below
+        :data:`INFEASIBLE`). The swarm passes each particle's best value as
+        its bound. A batch larger than :data:`POSE_CHUNK` is measured
         in chunks of that size (the same values; memory no longer grows with
         the swarm).
 
@@ -324,6 +326,15 @@ class Objective:
                                           None if rotations is None else rotations[i:i + POSE_CHUNK])
                      for i in range(0, len(angles), POSE_CHUNK)]
             return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
+        excess = np.asarray(self.prior.excess(angles), np.float64)
+        hopeless = (excess > 0) & (bound < INFEASIBLE)  # past a joint limit: worse than any pose keeping the rules
+        if hopeless.any():
+            values, overlap = INFEASIBLE + excess, np.zeros(len(excess))  # lower bounds, above their bounds
+            keep = np.flatnonzero(~hopeless)
+            if len(keep):
+                values[keep], overlap[keep] = self.bounded_overlap(angles[keep], bound[keep],
+                                                                   None if rotations is None else rotations[keep])
+            return values, overlap
         transforms, V = self._posed(angles, search=True)
         partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}
         values = np.array(self.combine(self.normalise(partial)), np.float64)

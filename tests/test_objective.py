@@ -195,3 +195,25 @@ def test_bounded_overlap_reports_the_intersection_volume_it_computed(rig):
     np.testing.assert_array_equal(values, obj.bounded(A, bound))
     np.testing.assert_array_equal(overlap[::2], raw[::2])
     assert np.all(overlap[1::2] == 0)
+
+
+def test_a_pose_past_a_joint_limit_is_not_measured_against_a_bound_that_keeps_the_rules(rig, monkeypatch):
+    obj = sl.Objective(rig, joint_limits=45.0)
+    A = random_angles(rig, 24, scale=0.8, seed=5)
+    A[::3] *= 0.2  # some poses well within the limits
+    past = obj.prior.excess(A) > 0
+    assert 4 <= past.sum() <= 20
+    exact = obj(A)
+    bound = np.full(24, 0.5)  # a pose that keeps the rules reached 0.5
+    posed = []
+    real = obj._posed
+    monkeypatch.setattr(obj, "_posed", lambda angles, search=False: posed.append(len(angles)) or real(angles, search))
+    got = obj.bounded(A, bound)
+    assert posed == [int((~past).sum())]  # only the others are posed
+    assert np.all(got[past] >= bound[past]) and np.all(got[past] <= exact[past] + 1e-12)
+    below = ~past & (exact < bound)
+    np.testing.assert_allclose(got[below], exact[below], rtol=1e-3)  # the search's pruned weights
+    # with no pose that keeps the rules yet (an infinite bound), every pose is measured
+    posed.clear()
+    np.testing.assert_allclose(obj.bounded(A, np.full(24, np.inf)), exact, rtol=1e-3)
+    assert posed == [24]
