@@ -331,8 +331,12 @@ class PoseResult:
         Wall time of the search.
     stats : dict
         Where the time went: ``exact_calls``/``exact_seconds`` (CGAL checks
-        of candidates for the swarm's best) and ``progress_calls``/
-        ``progress_seconds`` (terms of the best pose per iteration).
+        of candidates for the swarm's best), ``overlap_rejections``
+        (candidates rejected without CGAL, :data:`OVERLAP_CERTAIN`) and
+        ``progress_calls``/``progress_seconds`` (terms of the best pose per
+        iteration). A search on a proxy adds ``proxy_faces``, ``proxy_value``
+        (its best value on the proxy), ``full_rescored`` (candidates measured
+        on the full surface) and ``full_exact_calls`` (CGAL checks there).
     rotation : (d, d) float64
         The print rotation R (the identity with ``orient="keep"``).
     print_vertices : (n, d) float64
