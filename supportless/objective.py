@@ -320,10 +320,14 @@ class Objective:
             nowhere two layers deep, so a volume above rounding means the pose
             does intersect itself (the search's exact gate skips CGAL there).
         """
-        bound = np.broadcast_to(np.asarray(bound, np.float64), (len(angles),))
+        return self._bounded_overlap(angles, np.broadcast_to(np.asarray(bound, np.float64), (len(angles),)),
+                                     rotations)
+
+    def _bounded_overlap(self, angles, bound, rotations):
+        """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule."""
         if len(angles) > POSE_CHUNK:
-            parts = [self.bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
-                                          None if rotations is None else rotations[i:i + POSE_CHUNK])
+            parts = [self._bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
+                                           None if rotations is None else rotations[i:i + POSE_CHUNK])
                      for i in range(0, len(angles), POSE_CHUNK)]
             return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
         excess = np.asarray(self.prior.excess(angles), np.float64)
@@ -332,8 +336,8 @@ class Objective:
             values, overlap = INFEASIBLE + excess, np.zeros(len(excess))  # lower bounds, above their bounds
             keep = np.flatnonzero(~hopeless)
             if len(keep):
-                values[keep], overlap[keep] = self.bounded_overlap(angles[keep], bound[keep],
-                                                                   None if rotations is None else rotations[keep])
+                values[keep], overlap[keep] = self._bounded_overlap(angles[keep], bound[keep],
+                                                                    None if rotations is None else rotations[keep])
             return values, overlap
         transforms, V = self._posed(angles, search=True)
         partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}

@@ -181,7 +181,7 @@ def _interrupt_at(monkeypatch, call, how):
     from supportless.objective import Objective
 
     calls = {"n": 0}
-    bounded = Objective.bounded
+    bounded = Objective.bounded_overlap  # what the swarm calls once per evaluation
 
     def patched(self, angles, bound, rotations=None):
         calls["n"] += 1
@@ -194,7 +194,7 @@ def _interrupt_at(monkeypatch, call, how):
                 threading.Timer(0.001, os.kill, (os.getpid(), signal.SIGINT)).start()
         return bounded(self, angles, bound, rotations)
 
-    monkeypatch.setattr(Objective, "bounded", patched)
+    monkeypatch.setattr(Objective, "bounded_overlap", patched)
     return calls
 
 
