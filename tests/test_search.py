@@ -473,3 +473,34 @@ def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monk
     assert sum(asked) == sum(fast_asked) + fast.stats["overlap_rejections"]  # CGAL agreed: each one intersects
     np.testing.assert_array_equal(fast.angles, slow.angles)
     assert fast.value == slow.value
+
+
+def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
+    """Skipping the intersection term of poses that cannot beat their bound, and every term of poses past a joint
+    limit, leaves the swarm's decisions as they are with every pose measured in full."""
+    from supportless.objective import Objective
+
+    rig = sl.load_rig("demo:tree")
+    settings = SearchSettings(particles=30, iterations=12, joint_limit=30.0)
+    posed = []
+    real_posed = Objective._posed
+    monkeypatch.setattr(Objective, "_posed",
+                        lambda self, angles, search=False: posed.append(len(angles)) or real_posed(self, angles, search))
+    short = sl.optimize(rig, settings)
+    short_posed = sum(posed)
+    posed.clear()
+    bounded = Objective.bounded_overlap
+    measured = []
+
+    def in_full(self, angles, bound, rotations=None):  # no bound: every pose gets every term
+        values, overlap = bounded(self, angles, np.full(len(angles), np.inf), rotations)
+        measured.append(bool(np.all(values < 1e300)))
+        return values, overlap
+
+    monkeypatch.setattr(Objective, "bounded_overlap", in_full)
+    full = sl.optimize(rig, settings)
+    assert len(measured) > 20 and all(measured)
+    assert short_posed < 0.9 * sum(posed)  # the shortcuts did skip poses
+    np.testing.assert_array_equal(short.angles, full.angles)
+    np.testing.assert_array_equal(short.rotation, full.rotation)
+    assert short.value == full.value and short.history.tolist() == full.history.tolist()
