@@ -34,7 +34,8 @@ def main(argv=None):
     if args.out:
         path = Path(args.out)
         old = path.read_text() if path.is_file() else ""
-        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
+        # up to the next heading of any level: the hand-written subsections after the table stay
+        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^##|\Z)", re.S | re.M)
         path.write_text(pattern.sub(lambda _: text + "\n", old) if pattern.search(old)
                         else old.rstrip() + "\n\n" + text)
 

@@ -27,13 +27,11 @@ import platform
 import subprocess
 import sys
 import tempfile
-from pathlib import Path
 from typing import Callable
 
-__all__ = ["CASES", "TARGETS", "format_table", "measure_case", "run_targets"]
+from .bench import SHARED_DATA
 
-#: Folder of the shared test models (``../shared/data`` beside the repository root).
-SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+__all__ = ["CASES", "TARGETS", "format_table", "measure_case", "run_targets"]
 
 CASES = ("bunny", "bb-bunny", "character", "robot", "bunny111k")
 

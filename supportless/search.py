@@ -444,9 +444,9 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     settings = (settings or SearchSettings()).replace(**changes)
     coarse = rig.coarse_rig() if objective is None else None
     if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
-        full = settings.objective(rig)
-        found = _optimize(coarse, settings, objective=settings.objective(coarse, volume=full.volume), start=start,
-                          start_rotation=start_rotation, callback=callback)
+        full = settings.objective(rig)  # the proxy shares its volume mesh, so its ARAP operators, and its volume
+        found = _optimize(coarse, settings, objective=settings.objective(coarse, full.arap_data, full.volume),
+                          start=start, start_rotation=start_rotation, callback=callback)
         return _on_full_surface(rig, found, full, t0)
     if objective is None:
         objective = settings.objective(rig)
@@ -481,11 +481,13 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     if settings.exact_intersections and rig.dim == 3:
         cgal = _Timed(lambda x: self_intersects(rig.pose(layout.to_angles(x[None, :k])[0]), rig.faces), stats, "exact")
 
-        def feasible(x):
+        def no_intersection(x):
             if x.tobytes() in overlapping:  # no need to ask CGAL
                 stats["overlap_rejections"] += 1
                 return False
             return not cgal(x)
+
+        feasible = no_intersection
 
     def run_phase(turns, initial, particles, offset):
         o, to_angles, to_rotation = variables(turns)
@@ -620,9 +622,11 @@ def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: floa
     stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=found.value, full_exact_calls=0)
     A = np.concatenate([found.angles[None], found.candidates.get("angles", np.zeros((0,) + found.angles.shape))])
     Q = np.concatenate([found.rotation[None], found.candidates.get("rotations", np.zeros((0,) + found.rotation.shape))])
-    first = sorted({a.tobytes() + q.tobytes(): i for i, (a, q) in reversed(list(enumerate(zip(A, Q))))}.values())
-    order = np.argsort(np.asarray(objective(A[first], Q[first])), kind="stable")  # copies of a pose once
-    A, Q = A[first][order], Q[first][order]
+    first = np.sort(np.unique(np.hstack([A.reshape(len(A), -1), Q.reshape(len(Q), -1)]), axis=0,
+                              return_index=True)[1])  # copies of a pose once
+    A, Q = A[first], Q[first]
+    order = np.argsort(np.asarray(objective(A, Q)), kind="stable")
+    A, Q = A[order], Q[order]
     stats["full_rescored"] = len(A)
     angles, rotation = A[0], Q[0]
     if found.settings.exact_intersections and rig.dim == 3:

@@ -223,3 +223,22 @@ def bad_inputs(tmp_path_factory, branch_files, branch_rig, box_surface) -> dict:
 def bad_case(request, bad_inputs):
     """One bad input per test: ``(model, kwargs, culprit, fragments)`` from :func:`bad_inputs`."""
     return bad_inputs[request.param]
+
+
+@pytest.fixture(scope="session")
+def dense_branch():
+    """The branch figure subdivided twice, prepared with the proxy thresholds lowered to its size: (rig, target)."""
+    import igl
+
+    from supportless import rig as rig_mod
+
+    V, F, J, B = sl.demo_figure("branch")
+    V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
+    mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
+    try:
+        rig = sl.prepare_rig(V2, F2, J, B, "y", name="dense")
+    finally:
+        mp.undo()
+    return rig, len(F2) // 8

