@@ -282,10 +282,12 @@ class Objective:
         """Objective of a batch, exact only where it can beat ``bound``.
 
         What the search minimises: posed with :attr:`search_lbs` (the other
-        methods pose with the rig's own weights). The self-intersection term is
-        never negative, so a pose whose distortion and overhang terms alone
-        reach its bound cannot beat it; the (expensive) intersection term is
-        computed only for the others; a pose past a joint limit is not
+        methods pose with the rig's own weights). No term is ever negative,
+        so a pose whose cheaper terms alone reach its bound cannot beat it:
+        the terms are computed in order of cost (prior and overhang, then
+        distortion, then the standing rule, then the expensive
+        self-intersection), each only for the poses the ones before leave
+        below their bound; a pose past a joint limit is not
         measured at all when its bound keeps the rules (below
         :data:`INFEASIBLE`). The swarm passes each particle's best value as
         its bound. A batch larger than :data:`POSE_CHUNK` is measured
@@ -338,12 +340,28 @@ class Objective:
         if len(keep) == 0:
             return values, overlap
         if len(keep) < len(angles):
-            angles, bound = angles[keep], bound[keep]
+            angles, bound, excess = angles[keep], bound[keep], excess[keep]
             rotations = None if rotations is None else rotations[keep]
         transforms, V = self._posed(angles, search=True)
-        partial = self._cheap_terms(angles, transforms, V, rotations) | {"intersection": 0.0}
-        kept = np.array(self.combine(self.normalise(partial)), np.float64)
+        # the terms in order of cost, each only for the poses the cheaper ones leave below their bound (every
+        # term is >= 0, so a partial sum is a lower bound); the survivors' value is summed as combine() does
+        prior = np.asarray(self.prior.cost(angles), np.float64)
+        overhang = np.asarray(self.overhang(V, rotations), np.float64)
+        kept = self.w_overhang * (overhang / self.overhang_scale) + self.w_prior * prior
         todo = np.flatnonzero(kept < bound)
+        arap = np.zeros(len(kept))
+        if len(todo):
+            arap[todo] = arap_mod.arap_energy(self.arap_data, transforms[todo], backend=self.backend)
+            kept[todo] += self.w_arap * (arap[todo] / self.volume)
+            todo = todo[kept[todo] < bound[todo]]
+        if len(todo):
+            violation = excess[todo]
+            if self.keep_standing:
+                violation = violation + self.standing.violation(transforms[todo], V[todo])
+            partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
+                       "intersection": 0.0, "violation": violation}
+            kept[todo] = self.combine(self.normalise(partial))
+            todo = todo[kept[todo] < bound[todo]]
         if len(todo) and self.w_intersect != 0:
             inter = np.asarray(self._intersection(V[todo]), np.float64)
             overlap[keep[todo]] = inter

@@ -9,6 +9,7 @@ from scipy.spatial.transform import Rotation
 from meshes import box
 from supportless.energies.arap import (
     ArapData,
+    _rotation_terms,
     arap_energy,
     arap_energy_direct,
     arap_precompute,
@@ -283,3 +284,31 @@ def test_the_fast_kmeans_seeds_are_scipys(seed):
         fast_codes, fast_labels = kmeans2(data, _kmeans_pp(data, 40, np.random.default_rng(seed)), minit="matrix")
     np.testing.assert_array_equal(fast_labels, labels)
     np.testing.assert_array_equal(fast_codes, codes)
+
+
+def _signed_nuclear_norm(S):
+    """``max_R tr(R^T S)`` over rotations by the SVD: (..., d, d) -> (...)."""
+    sig = np.linalg.svd(S, compute_uv=False)
+    sign = np.where(np.linalg.det(S) < 0.0, -1.0, 1.0)
+    return sig[..., :-1].sum(axis=-1) + sign * sig[..., -1]
+
+
+@pytest.mark.parametrize("kind", ["gaussian", "scaled rotations", "near rotations", "rank one", "rank two",
+                                  "reflections", "near reflections", "2d"])
+def test_the_rotation_term_is_the_signed_sum_of_singular_values(kind):
+    """The fast per-cluster kernel against the SVD, on general blocks and on the degenerate ones
+    (multiple roots of its quartic) where it hands over to Jacobi."""
+    rng = np.random.default_rng(3)
+    P, g = 40, 25
+    R = Rotation.random(P * g, random_state=4).as_matrix().reshape(P, g, 3, 3)
+    S = {"gaussian": lambda: rng.normal(size=(P, g, 3, 3)),
+         "scaled rotations": lambda: R * rng.uniform(0.01, 100.0, (P, g, 1, 1)),
+         "near rotations": lambda: R + 1e-7 * rng.normal(size=R.shape),
+         "rank one": lambda: rng.normal(size=(P, g, 3, 1)) * rng.normal(size=(P, g, 1, 3)),
+         "rank two": lambda: R @ np.diag([2.0, 1.0, 0.0]),
+         "reflections": lambda: R @ np.diag([1.0, 1.0, -1.0]),
+         "near reflections": lambda: R @ np.diag([1.0, 1.0, -1.0]) + 1e-5 * rng.normal(size=R.shape),
+         "2d": lambda: rng.normal(size=(P, g, 2, 2))}[kind]()
+    got = _rotation_terms(np.ascontiguousarray(np.swapaxes(S, 1, 2)))  # the kernel's (P, d, g, d) layout
+    scale = np.linalg.norm(S, axis=(2, 3)).sum(axis=1)
+    np.testing.assert_allclose(got / scale, _signed_nuclear_norm(S).sum(axis=1) / scale, rtol=0, atol=1e-13)

@@ -169,6 +169,36 @@ def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
     assert not np.array_equal(searched[below], exact[below])
 
 
+def test_bounded_measures_each_term_only_where_the_cheaper_ones_leave_a_pose_below_its_bound(rig, monkeypatch):
+    from supportless import objective as objective_mod
+
+    obj = sl.Objective(rig)
+    obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
+    A = random_angles(rig, 60, scale=1.2, seed=5)
+    raw = obj.raw_terms(A)
+    terms = obj.normalise(raw)
+    exact = obj.combine(terms)
+    # bounds between the partial sums, so that every stage leaves some poses out
+    first = obj.w_overhang * terms["overhang"] + obj.w_prior * terms["prior"]
+    second = first + obj.w_arap * terms["arap"]
+    later = np.where(exact > second * (1 + 1e-6), 0.5 * (second + exact), exact * 1.001)  # standing or intersection
+    bound = np.where(np.arange(60) % 3 == 0, first * 0.999, np.where(np.arange(60) % 3 == 1, exact * 1.001, later))
+    calls = {"arap": [], "standing": [], "intersection": []}
+    arap_energy, violation, intersection = objective_mod.arap_mod.arap_energy, obj.standing.violation, obj._intersection
+    monkeypatch.setattr(objective_mod.arap_mod, "arap_energy",
+                        lambda data, T, backend: calls["arap"].append(len(T)) or arap_energy(data, T, backend))
+    monkeypatch.setattr(obj.standing, "violation", lambda T, V: calls["standing"].append(len(T)) or violation(T, V))
+    monkeypatch.setattr(obj, "_intersection", lambda V: calls["intersection"].append(len(V)) or intersection(V))
+    got = obj.bounded(A, bound)
+    assert calls["arap"] == [int(np.sum(first < bound))] and 0 < calls["arap"][0] < 60
+    assert calls["standing"] == [int(np.sum((first < bound) & (second < bound)))]
+    cheap = obj.combine(terms | {"intersection": np.zeros(60)})
+    assert calls["intersection"] == [int(np.sum(cheap < bound))] and 0 < calls["intersection"][0] < calls["standing"][0]
+    below = exact < bound
+    np.testing.assert_allclose(got[below], exact[below], rtol=1e-12)
+    assert np.all(got[~below] >= bound[~below]) and np.all(got[~below] <= exact[~below] + 1e-12)
+
+
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
     from supportless import objective as objective_mod
 

@@ -275,18 +275,18 @@ def _stack_transforms(transforms: np.ndarray, m: int, d: int) -> np.ndarray:
     return np.ascontiguousarray(np.swapaxes(transforms, -1, -2)).reshape(P, m * (d + 1), d)
 
 
-@njit(cache=True, inline="always")
-def _rotation_term(S, g, d):
-    """``max_R tr(R^T S)`` over SO(d) for the d x d block ``S[g]``.
+@njit(cache=True)
+def _rotation_term_jacobi(S, g, d):
+    """:func:`_rotation_term` by one-sided Jacobi (Hestenes) orthogonalisation.
 
-    One-sided Jacobi (Hestenes) orthogonalisation of the columns gives the
-    singular values to high relative accuracy; the determinant's sign comes
-    from ``S`` itself.
+    The singular values of the columns come to high relative accuracy; the
+    determinant's sign comes from ``S`` itself. Slower (an allocation and a
+    few sweeps per block), robust where the fast form is not.
     """
     a = np.empty((3, 3))
     for r in range(d):
         for c in range(d):
-            a[r, c] = S[g, r, c]
+            a[r, c] = S[r, g, c]
     if d == 3:
         det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
                - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
@@ -332,10 +332,81 @@ def _rotation_term(S, g, d):
     return total
 
 
+@njit(cache=True, inline="always")
+def _rotation_term(S, g, d):
+    """``max_R tr(R^T S_g)`` over SO(d) for the d x d block ``S_g = S[:, g, :]``.
+
+    In 2D the closed form ``hypot(s00 + s11, s10 - s01)``. In 3D the largest
+    eigenvalue of Horn's traceless symmetric 4 x 4 quaternion matrix of
+    ``S`` (whose eigenvalues are ``+-s1 +- s2 +- s3`` with an even number of
+    minus signs, ``s`` the singular values signed by ``det S``), found as the
+    largest root of its characteristic polynomial
+    ``x^4 - 2 |S|_F^2 x^2 - 8 det(S) x + det(N)`` by Newton's method from
+    ``sqrt(3) |S|_F``: above the largest root a polynomial with only real
+    roots is increasing and convex, so the iterates decrease to it
+    monotonically (and a near-rotation block, whose singular values are
+    equal, starts at its root). Where that root is (nearly) multiple, which
+    Newton's method finds only to about the square root of the rounding
+    (blocks of rank one, or reflections with equal singular values, never
+    met in a search), the block is left to :func:`_rotation_term_jacobi`.
+    """
+    if d == 2:
+        return np.hypot(S[0, g, 0] + S[1, g, 1], S[1, g, 0] - S[0, g, 1])
+    sxx, sxy, sxz = S[0, g, 0], S[0, g, 1], S[0, g, 2]
+    syx, syy, syz = S[1, g, 0], S[1, g, 1], S[1, g, 2]
+    szx, szy, szz = S[2, g, 0], S[2, g, 1], S[2, g, 2]
+    f2 = sxx * sxx + sxy * sxy + sxz * sxz + syx * syx + syy * syy + syz * syz + szx * szx + szy * szy + szz * szz
+    if f2 == 0.0:
+        return 0.0
+    det = sxx * (syy * szz - syz * szy) - sxy * (syx * szz - syz * szx) + sxz * (syx * szy - syy * szx)
+    # Horn's matrix N (symmetric, traceless)
+    a00 = sxx + syy + szz
+    a01 = syz - szy
+    a02 = szx - sxz
+    a03 = sxy - syx
+    a11 = sxx - syy - szz
+    a12 = sxy + syx
+    a13 = szx + sxz
+    a22 = syy - sxx - szz
+    a23 = syz + szy
+    a33 = szz - sxx - syy
+    # det(N) by 2 x 2 minors of the first two and the last two rows
+    m01 = a00 * a11 - a01 * a01
+    m02 = a00 * a12 - a02 * a01
+    m03 = a00 * a13 - a03 * a01
+    m12 = a01 * a12 - a02 * a11
+    m13 = a01 * a13 - a03 * a11
+    m23 = a02 * a13 - a03 * a12
+    n01 = a02 * a13 - a12 * a03
+    n02 = a02 * a23 - a22 * a03
+    n03 = a02 * a33 - a23 * a03
+    n12 = a12 * a23 - a22 * a13
+    n13 = a12 * a33 - a23 * a13
+    n23 = a22 * a33 - a23 * a23
+    c0 = m01 * n23 - m02 * n13 + m03 * n12 + m12 * n03 - m13 * n02 + m23 * n01
+    c1 = -8.0 * det
+    c2 = -2.0 * f2
+    x = np.sqrt(3.0 * f2)
+    for _ in range(60):
+        x2 = x * x
+        p = (x2 + c2) * x2 + c1 * x + c0
+        dp = (4.0 * x2 + 2.0 * c2) * x + c1
+        if not (p > 0.0 and dp > 0.0):  # at the root (to rounding)
+            break
+        step = p / dp
+        x -= step
+        if step <= 1e-15 * x:
+            break
+    x2 = x * x
+    if (4.0 * x2 + 2.0 * c2) * x + c1 < 1e-2 * x2 * x:  # p'(x) = prod(x - other roots): one is within ~x/10
+        return _rotation_term_jacobi(S, g, 3)
+    return x
+
+
 @njit(cache=True, parallel=True)
 def _rotation_terms(S):
-    """Sum over clusters of :func:`_rotation_term`; ``S`` is (P, g, d, d)."""
-    P, g, d = S.shape[0], S.shape[1], S.shape[2]
+    """Sum over clusters of :func:`_rotation_term`; ``S`` is (P, d, g, d) (block ``g`` of pose ``p``: ``S[p, :, g]``)."""
+    P, g, d = S.shape[0], S.shape[2], S.shape[1]
     out = np.zeros(P)
     for p in prange(P):
         t = 0.0
@@ -356,8 +427,8 @@ def arap_energy(data: ArapData, transforms, backend="fast"):
         Bone transforms (linear part ``[..., :d]``, translation ``[..., d]``).
     backend : {"fast", "numpy"}
         How the per-cluster rotation terms are found: ``fast`` by a numba
-        one-sided Jacobi kernel, ``numpy`` by ``numpy.linalg.svd`` (agree to
-        ~1e-12 relative).
+        kernel (Horn's quaternion matrix, :func:`_rotation_term`), ``numpy``
+        by ``numpy.linalg.svd`` (agree to ~1e-12 relative).
 
     Returns
     -------
@@ -387,14 +458,17 @@ def arap_energy(data: ArapData, transforms, backend="fast"):
     Tt = np.swapaxes(T, 1, 2)  # (P, d, n_dof)
     quad = 0.5 * np.einsum("pka,pka->p", T, data.quad @ T)
 
-    # Cluster covariances S_g = T^T K_g: (P, d, g*d) -> (P, g, d, d)
-    S = (Tt @ data.cov).reshape(P, d, g, d).transpose(0, 2, 1, 3)
+    # Cluster covariances S_g = T^T K_g: (P, d, g*d) -> (P, d, g, d), block g of pose p is S[p, :, g]
+    # (one product per pose: a single (P*d, n_dof) product is multithreaded by BLAS, whose waiting
+    # threads then slow the numba kernels down)
+    S = (Tt @ data.cov).reshape(P, d, g, d)
     if backend == "numpy":
+        S = S.transpose(0, 2, 1, 3)  # (P, g, d, d)
         sig = np.linalg.svd(S, compute_uv=False)  # (P, g, d), descending
         sign = np.where(np.linalg.det(S) < 0.0, -1.0, 1.0)
         rot = (sig[..., :-1].sum(axis=-1) + sign * sig[..., -1]).sum(axis=-1)  # sum_g max_R tr(R^T S_g)
     else:
-        rot = _rotation_terms(np.ascontiguousarray(S))
+        rot = _rotation_terms(S)
     energy = quad - rot + data.const
     energy = np.maximum(energy, 0.0)
     return float(energy[0]) if single else energy
