@@ -109,6 +109,10 @@ def _search_options(f):
         click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(2, None)),
         click.option("--iterations", default=d.iterations, show_default=True, type=click.IntRange(0, None)),
         click.option("--seed", default=d.seed, show_default=True, type=click.IntRange(min=0)),
+        click.option("--polish", default=d.polish, type=click.IntRange(0, None),
+                     help="Generations of a local CMA-ES from the swarm's best pose, small steps [default: on a "
+                          "dense model, after the search on its simplified proxy, on the full surface; none "
+                          "otherwise]."),
         click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
                      help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
                           "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),

@@ -464,12 +464,12 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
         return check
 
     monkeypatch.setattr(search_mod, "self_intersects", full_surface(0))
-    clear = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)  # the choice, before any polish
     assert clear.stats["full_exact_calls"] == 1
     np.testing.assert_allclose(seen[0], rig.pose(clear.angles))  # the proxy's answer, checked on the full surface
     seen.clear()
     monkeypatch.setattr(search_mod, "self_intersects", full_surface(1))
-    result = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
     assert result.stats["full_exact_calls"] == 2
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
     np.testing.assert_allclose(seen[1], rig.pose(result.angles))
@@ -478,9 +478,28 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
 
 def test_the_proxys_candidates_are_rescored_on_the_full_surface(dense_branch):
     rig, _ = dense_branch
-    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", exact_intersections=False)
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", exact_intersections=False, polish=0)
     c = result.candidates  # the proxy's good poses, with the proxy's values
     full = np.asarray(result.objective(c["angles"], c["rotations"]))
     assert result.stats["full_rescored"] >= 2
     assert result.value == pytest.approx(full.min(), rel=1e-12)  # the best of them on the full surface
     assert result.value <= float(result.objective(c["angles"][0])) + 1e-12  # never worse than the proxy's best
+
+
+def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monkeypatch):
+    rig, _ = dense_branch
+    chosen = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
+    seen = []
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=3,
+                         callback=lambda it, info: seen.append((it, info["iterations"])))
+    assert result.stats["full_polish_evaluations"] == 1 + 3 * search_mod.POLISH_SAMPLES
+    assert result.value <= chosen.value  # it starts at the chosen pose and keeps it unless it finds better
+    np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)  # full surface
+    assert result.objective.rig is rig and not search_mod.self_intersects(rig.pose(result.angles), rig.faces)
+    # the progress counts the proxy's 4 iterations and the polish's 3 as one search of 7
+    assert seen == [(it, 7) for it in range(1, 8)]
+    assert len(result.history) == len(chosen.history) + 3
+    # by default the polish's generations follow the surface's size (about the same cost at any density)
+    monkeypatch.setattr(search_mod, "PROXY_POLISH_BUDGET", 2 * len(rig.faces))
+    default = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    assert default.stats["full_polish_evaluations"] == 1 + 2 * search_mod.POLISH_SAMPLES

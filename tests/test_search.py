@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.search import particle_swarm
+from supportless.search import POLISH_SAMPLES, particle_swarm
 from supportless.settings import PSO_PRESETS, SearchSettings, resolve_fixed_bones
 
 
@@ -225,7 +225,7 @@ def _printed_support(result, rig):
 
 def test_orient_keep_is_the_pose_only_search(branch_rig):
     """``orient="keep"`` adds nothing: the swarm over the pose variables alone, the same result bit for bit."""
-    from supportless.search import particle_swarm
+    from supportless.search import POLISH_SAMPLES, particle_swarm
     from supportless.settings import PSO_PRESETS
     from supportless.symmetry import PoseLayout
 
@@ -498,3 +498,16 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
     np.testing.assert_array_equal(short.angles, full.angles)
     np.testing.assert_array_equal(short.rotation, full.rotation)
     assert short.value == full.value and short.history.tolist() == full.history.tolist()
+
+
+def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
+    plain = sl.optimize(branch_rig, particles=12, iterations=6, seed=3)
+    assert plain.stats["polish_evaluations"] == 0  # none by default on a model searched at full resolution
+    polished = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, polish=5)
+    assert polished.stats["polish_evaluations"] == 1 + 5 * POLISH_SAMPLES
+    assert polished.value < plain.value  # a short swarm leaves room that small steps find
+    np.testing.assert_array_equal(polished.history[:len(plain.history)], plain.history)  # the same swarm first
+    assert len(polished.history) == len(plain.history) + 5 and np.all(np.diff(polished.history) <= 0)
+    assert not sl.energies.exact.self_intersects(branch_rig.pose(polished.angles), branch_rig.faces)
+    with pytest.raises(sl.errors.InputError):
+        SearchSettings(polish=-1)
