@@ -225,7 +225,7 @@ def _printed_support(result, rig):
 
 def test_orient_keep_is_the_pose_only_search(branch_rig):
     """``orient="keep"`` adds nothing: the swarm over the pose variables alone, the same result bit for bit."""
-    from supportless.search import POLISH_SAMPLES, particle_swarm
+    from supportless.search import particle_swarm
     from supportless.settings import PSO_PRESETS
     from supportless.symmetry import PoseLayout
 
