@@ -309,14 +309,27 @@ class Objective:
         """
         return self.bounded_overlap(angles, bound, rotations)[0]
 
-    def bounded_overlap(self, angles: np.ndarray, bound: np.ndarray,
-                        rotations: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def bounded_overlap(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None,
+                        intersection_bound: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`bounded`, and the self-intersection volume it computed on the way.
+
+        Parameters
+        ----------
+        angles, bound, rotations
+            As :meth:`bounded`.
+        intersection_bound : float, optional
+            Measure the (expensive) self-intersection term only where the
+            other terms are below this too: a pose whose other terms are
+            below its ``bound`` but not below ``intersection_bound`` gets
+            their sum, without the self-intersection term (a lower bound
+            that may be below ``bound``). The search passes the swarm's best
+            value: only a pose that could become the swarm's best is
+            measured in full.
 
         Returns
         -------
         values : (P,) float64
-            As :meth:`bounded`.
+            As :meth:`bounded` (see ``intersection_bound``).
         overlap : (P,) float64
             The ray grid's self-intersection volume where it was computed, 0
             elsewhere. A closed surface that does not intersect itself is
@@ -324,13 +337,14 @@ class Objective:
             does intersect itself (the search's exact gate skips CGAL there).
         """
         return self._bounded_overlap(angles, np.broadcast_to(np.asarray(bound, np.float64), (len(angles),)),
-                                     rotations)
+                                     rotations, np.inf if intersection_bound is None else float(intersection_bound))
 
-    def _bounded_overlap(self, angles, bound, rotations):
+    def _bounded_overlap(self, angles, bound, rotations, intersection_bound=np.inf):
         """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule."""
         if len(angles) > POSE_CHUNK:
             parts = [self._bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
-                                           None if rotations is None else rotations[i:i + POSE_CHUNK])
+                                           None if rotations is None else rotations[i:i + POSE_CHUNK],
+                                           intersection_bound)
                      for i in range(0, len(angles), POSE_CHUNK)]
             return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
         excess = np.asarray(self.prior.excess(angles), np.float64)
@@ -361,7 +375,7 @@ class Objective:
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
                        "intersection": 0.0, "violation": violation}
             kept[todo] = self.combine(self.normalise(partial))
-            todo = todo[kept[todo] < bound[todo]]
+            todo = todo[kept[todo] < np.minimum(bound[todo], intersection_bound)]
         if len(todo) and self.w_intersect != 0:
             inter = np.asarray(self._intersection(V[todo]), np.float64)
             overlap[keep[todo]] = inter

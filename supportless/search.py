@@ -530,7 +530,9 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
 
         def f(X, bound):
             R = rotations_from_params(X[:, k:], rig.up) if turns else None
-            values, overlap = objective.bounded_overlap(to_angles(X), bound, R)
+            # the self-intersection only for poses that could become the swarm's best (the least of the personal
+            # bests): a particle's own best is judged by the other terms, the swarm's by all, then exactly
+            values, overlap = objective.bounded_overlap(to_angles(X), bound, R, intersection_bound=np.min(bound))
             overlapping.clear()
             overlapping.update(X[i].tobytes() for i in np.flatnonzero(overlap > OVERLAP_CERTAIN * objective.volume))
             return values
