@@ -38,6 +38,11 @@ ROOT = Path(__file__).resolve().parents[1]
 HEADING = "## Zoo"
 
 
+
+def _mm(x: float) -> str:
+    """Millimetres of filament, whole; a difference within rounding of 0 (e.g. -0.3) reads 0, not -0."""
+    return f"{0.0 if abs(x) < 0.5 else x:.0f}"
+
 def zoo_figures() -> list[str]:
     """The built-in figures that are 3D (every one but the planar ``woody2d``)."""
     return [name for name in sl.DEMO_FIGURES if sl.demo_figure(name)[0].shape[1] == 3]
@@ -107,7 +112,7 @@ def table(rows: list[dict]) -> str:
             continue
         rep, s = r["report"], r.get("slicer")
         after = rep["after"]
-        support = (f"{s['before']['support_mm']:.0f} → {s['after']['support_mm']:.0f}" if s
+        support = (f"{_mm(s['before']['support_mm'])} → {_mm(s['after']['support_mm'])}" if s
                    else f"not sliced ({r.get('slicer_error', '')})")
         sliced = _num(s["reduction_percent"], ".1f", " %") if s else "–"
         lines.append(
