@@ -427,23 +427,92 @@ def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
 
 
 @njit(parallel=True, cache=True)
-def _skin_csr3(indptr, indices, data, T, out):  # pragma: no cover - compiled
-    # three named sums per vertex: 3x faster than a loop over the columns
+def _skin_blocks3(start, bone, coef, T, out):  # pragma: no cover - compiled
+    # per vertex, per bone of its row: the 4 coefficients against the bone's 4 rows of T, three named sums; the
+    # same additions in the same order as a loop over the CSR's non-zeros (a missing one adds 0.0), with one
+    # index per bone instead of one per non-zero and the bone's rows of T read together
     for p in prange(T.shape[0]):
         Tp = T[p]
-        for i in range(len(indptr) - 1):
+        for i in range(len(start) - 1):
             x = 0.0
             y = 0.0
             z = 0.0
-            for k in range(indptr[i], indptr[i + 1]):
-                j = indices[k]
-                w = data[k]
-                x += w * Tp[j, 0]
-                y += w * Tp[j, 1]
-                z += w * Tp[j, 2]
+            for k in range(start[i], start[i + 1]):
+                j = 4 * bone[k]
+                c0 = coef[k, 0]
+                c1 = coef[k, 1]
+                c2 = coef[k, 2]
+                c3 = coef[k, 3]
+                x += c0 * Tp[j, 0]
+                y += c0 * Tp[j, 1]
+                z += c0 * Tp[j, 2]
+                x += c1 * Tp[j + 1, 0]
+                y += c1 * Tp[j + 1, 1]
+                z += c1 * Tp[j + 1, 2]
+                x += c2 * Tp[j + 2, 0]
+                y += c2 * Tp[j + 2, 1]
+                z += c2 * Tp[j + 2, 2]
+                x += c3 * Tp[j + 3, 0]
+                y += c3 * Tp[j + 3, 1]
+                z += c3 * Tp[j + 3, 2]
             out[p, i, 0] = x
             out[p, i, 1] = y
             out[p, i, 2] = z
+
+
+@njit(parallel=True, cache=True)
+def _skin_blocks(start, bone, coef, T, out):  # pragma: no cover - compiled
+    # :func:`_skin_blocks3` for any block width (a planar rig: 3)
+    s = coef.shape[1]
+    for p in prange(T.shape[0]):
+        Tp = T[p]
+        for i in range(len(start) - 1):
+            x = 0.0
+            y = 0.0
+            z = 0.0
+            for k in range(start[i], start[i + 1]):
+                j = s * bone[k]
+                for a in range(s):
+                    c = coef[k, a]
+                    x += c * Tp[j + a, 0]
+                    y += c * Tp[j + a, 1]
+                    z += c * Tp[j + a, 2]
+            out[p, i, 0] = x
+            out[p, i, 1] = y
+            out[p, i, 2] = z
+
+
+def bone_blocks(M, stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A sparse LBS matrix as one block of ``stride`` coefficients per (vertex, bone) it couples.
+
+    Parameters
+    ----------
+    M : scipy.sparse CSR matrix, (n, m*stride) float64
+        From :func:`lbs_operator`: column ``stride*b + a`` holds weight of
+        bone ``b`` times coordinate ``a`` of the vertex (1 for the last).
+    stride : int
+        ``d + 1``.
+
+    Returns
+    -------
+    start : (n + 1,) int64
+        The blocks of vertex ``i`` are ``start[i]:start[i+1]``.
+    bone : (q,) int64
+        Bone of each block, increasing within a vertex.
+    coef : (q, stride) float64
+        The block's entries of ``M`` (0 where it has none).
+    """
+    M = M.tocsr()
+    M.sort_indices()
+    rows = np.repeat(np.arange(M.shape[0]), np.diff(M.indptr))
+    bones = M.indices // stride
+    key = rows.astype(np.int64) * (M.shape[1] // stride + 1) + bones
+    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    block = np.cumsum(np.r_[False, key[1:] != key[:-1]])
+    coef = np.zeros((len(first), stride))
+    coef[block, M.indices % stride] = M.data
+    start = np.searchsorted(rows[first], np.arange(M.shape[0] + 1)).astype(np.int64)
+    return start, bones[first].astype(np.int64), coef
 
 
 def pruned_weights(weights: np.ndarray, floor: float) -> np.ndarray:
@@ -477,7 +546,8 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     ----------
     M : (n, m*(d+1)) float64 array or scipy.sparse CSR matrix
         From :func:`lbs_matrix` or :func:`lbs_operator`. A sparse one is
-        applied by a compiled loop over its non-zeros, parallel over poses.
+        applied by a compiled loop over its (vertex, bone) blocks
+        (:func:`bone_blocks`), parallel over poses.
     transforms : (P, m, d, d+1) or (m, d, d+1) float64
 
     Returns
@@ -494,6 +564,11 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
         T = np.concatenate([T, np.zeros(T.shape[:2] + (3 - d,))], axis=2)
     T = np.ascontiguousarray(T, np.float64)
     out = np.empty((T.shape[0], M.shape[0], 3))
-    _skin_csr3(M.indptr.astype(np.int64), M.indices.astype(np.int64), M.data.astype(np.float64), T, out)
+    # the blocks are kept on the matrix (computed once; the LBS operators are never modified in place)
+    blocks = getattr(M, "_supportless_bone_blocks", None)
+    if blocks is None or blocks[2].shape[1] != d + 1:
+        blocks = bone_blocks(M, d + 1)
+        M._supportless_bone_blocks = blocks
+    (_skin_blocks3 if d == 3 else _skin_blocks)(*blocks, T, out)
     out = out[..., :d] if d < 3 else out
     return out[0] if single else out

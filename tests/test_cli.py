@@ -183,7 +183,7 @@ def _interrupt_at(monkeypatch, call, how):
     calls = {"n": 0}
     bounded = Objective.bounded_overlap  # what the swarm calls once per evaluation
 
-    def patched(self, angles, bound, rotations=None):
+    def patched(self, angles, bound, rotations=None, **options):
         calls["n"] += 1
         if calls["n"] == call:
             if how == "raise":
@@ -192,7 +192,7 @@ def _interrupt_at(monkeypatch, call, how):
                 os.kill(os.getpid(), signal.SIGINT)
             else:
                 threading.Timer(0.001, os.kill, (os.getpid(), signal.SIGINT)).start()
-        return bounded(self, angles, bound, rotations)
+        return bounded(self, angles, bound, rotations, **options)
 
     monkeypatch.setattr(Objective, "bounded_overlap", patched)
     return calls

@@ -199,6 +199,27 @@ def test_bounded_measures_each_term_only_where_the_cheaper_ones_leave_a_pose_bel
     assert np.all(got[~below] >= bound[~below]) and np.all(got[~below] <= exact[~below] + 1e-12)
 
 
+def test_the_self_intersection_is_measured_only_below_the_intersection_bound(rig, monkeypatch):
+    obj = sl.Objective(rig)
+    obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
+    A = random_angles(rig, 30, scale=1.5, seed=11)
+    terms = obj.normalise(obj.raw_terms(A))
+    exact = obj.combine(terms)
+    others = obj.combine(terms | {"intersection": np.zeros(30)})
+    cut = float(np.median(others))
+    measured = []
+    intersection = obj._intersection
+    monkeypatch.setattr(obj, "_intersection", lambda V: measured.append(len(V)) or intersection(V))
+    values, overlap = obj.bounded_overlap(A, np.full(30, np.inf), intersection_bound=cut)
+    below = others < cut
+    assert measured == [int(below.sum())]
+    np.testing.assert_allclose(values[below], exact[below], rtol=1e-12)
+    np.testing.assert_allclose(values[~below], others[~below], rtol=1e-12)  # without the self-intersection
+    assert np.all(overlap[~below] == 0)
+    assert np.any(~below & (terms["intersection"] > 0))  # some of those do overlap: their values are lower bounds
+    assert np.any(below & (terms["intersection"] > 0))
+
+
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
     from supportless import objective as objective_mod
 

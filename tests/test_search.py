@@ -255,7 +255,7 @@ def test_free_orientation_is_never_worse_than_keeping_it(branch_rig):
     np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-12)
     assert np.linalg.det(R) == pytest.approx(1.0)
     # the objective's overhang term is the print frame's support
-    printed = sl.overhang_energy(free.print_vertices, branch_rig.faces, branch_rig.up, 55.0)
+    printed = sl.overhang_energy(free.print_vertices, branch_rig.faces, branch_rig.up, free.objective.overhang_angle)
     assert free.terms["overhang"] == pytest.approx(printed / free.objective.overhang_scale, rel=1e-9)
     # contact and balance stay in the display frame: the standing mesh keeps its feet on the plate
     assert free.objective.standing.measures(branch_rig.transforms(free.angles), branch_rig.pose(free.angles))[
@@ -490,9 +490,10 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
     short_posed = sum(posed)
     posed.clear()
     bounded = Objective.bounded_overlap
-    monkeypatch.setattr(Objective, "bounded_overlap",  # no bound: every pose gets every term
-                        lambda self, angles, bound, rotations=None: bounded(self, angles, np.full(len(angles), np.inf),
-                                                                            rotations))
+    monkeypatch.setattr(Objective, "bounded_overlap",  # no bound: every pose gets every term (the
+                        # self-intersection, as in the search, where the others are below the swarm's best)
+                        lambda self, angles, bound, rotations=None, intersection_bound=None: bounded(
+                            self, angles, np.full(len(angles), np.inf), rotations, intersection_bound))
     full = sl.optimize(rig, settings)
     assert short_posed < 0.9 * sum(posed)  # the shortcuts did skip poses
     np.testing.assert_array_equal(short.angles, full.angles)
@@ -511,3 +512,18 @@ def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
     assert not sl.energies.exact.self_intersects(branch_rig.pose(polished.angles), branch_rig.faces)
     with pytest.raises(sl.errors.InputError):
         SearchSettings(polish=-1)
+
+
+def test_only_poses_that_could_become_the_swarms_best_are_measured_for_self_intersection(branch_rig, monkeypatch):
+    from supportless.objective import Objective
+
+    measured = []
+    real = Objective._intersection
+    monkeypatch.setattr(Objective, "_intersection",  # poses measured (one for an unbatched pose)
+                        lambda self, V: measured.append(len(V) if V.ndim == 3 else 1) or real(self, V))
+    result = sl.optimize(branch_rig, particles=30, iterations=10, seed=2)
+    progress = result.stats["progress_calls"]  # each change of the best measures it once, in full
+    evaluations = 30 * 11 + 15 * 11  # the pose phase, then half the swarm turning
+    assert 0 < sum(measured) - progress < 0.2 * evaluations
+    assert float(result.objective(result.angles, result.rotation)) == pytest.approx(result.value, rel=1e-12)
+    assert not sl.energies.exact.self_intersects(branch_rig.pose(result.angles), branch_rig.faces)

@@ -39,7 +39,7 @@ def test_layout_round_trip_and_symmetric_angles(tpose_rig):
 
 def test_a_symmetric_search_finds_a_mirror_symmetric_pose(tpose_rig):
     rig = tpose_rig
-    result = sl.optimize(rig, particles=20, iterations=5, seed=0, symmetric=True)
+    result = sl.optimize(rig, particles=20, iterations=5, seed=0, symmetric=True, orient="keep")  # bones, not turns
     mirror = find_mirror(rig)
     J = rig.posed_joints(result.angles)
     image = J - 2.0 * ((J - mirror.point) @ mirror.normal)[:, None] * mirror.normal
