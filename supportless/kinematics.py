@@ -488,8 +488,8 @@ def bone_blocks(M, stride: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     Parameters
     ----------
     M : scipy.sparse CSR matrix, (n, m*stride) float64
-        From :func:`lbs_operator`: column ``stride*b + a`` holds weight of
-        bone ``b`` times coordinate ``a`` of the vertex (1 for the last).
+        From :func:`lbs_operator`: column ``stride*b + a`` holds the weight
+        of bone ``b`` times coordinate ``a`` of the vertex (1 for the last).
     stride : int
         ``d + 1``.
 

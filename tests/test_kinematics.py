@@ -363,3 +363,30 @@ def test_the_search_skinning_moves_no_vertex_further_than_its_stated_bound():
         assert 0 < moved < 3e-4 * np.ptp(rig.vertices @ rig.up), name
         np.testing.assert_allclose(kin.skin(objective.search_lbs, rig.transforms(rig.rest_angles())), rig.vertices,
                                    atol=1e-12)
+
+
+def test_skinning_by_bone_blocks_adds_exactly_as_a_loop_over_the_nonzeros():
+    """The compiled kernel runs over (vertex, bone) blocks; its sums are the plain loop's, bit for bit."""
+    from scipy.sparse import csr_matrix
+
+    from supportless.kinematics import bone_blocks, lbs_matrix, skin, stack_transforms
+
+    rng = np.random.default_rng(7)
+    V = rng.normal(size=(40, 3))
+    V[::5, 1] = 0.0  # a zero coordinate: a non-zero fewer in the CSR, a 0 in its block
+    W = rng.random((40, 7)) * (rng.random((40, 7)) < 0.4)
+    W[W.sum(1) == 0, 2] = 1.0
+    W /= W.sum(1, keepdims=True)
+    M = csr_matrix(lbs_matrix(V, W))
+    start, bone, coef = bone_blocks(M, 4)
+    assert np.all(np.diff(start) == np.count_nonzero(W, axis=1)) and coef.shape == (start[-1], 4)
+    transforms = rng.normal(size=(3, 7, 3, 4))
+    T = stack_transforms(transforms)
+    got = skin(M, transforms)
+    for p in range(3):
+        for i in range(40):
+            acc = [0.0, 0.0, 0.0]
+            for k in range(M.indptr[i], M.indptr[i + 1]):
+                for c in range(3):
+                    acc[c] += float(M.data[k]) * float(T[p, M.indices[k], c])
+            assert got[p, i].tolist() == acc
