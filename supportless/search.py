@@ -37,8 +37,9 @@ __all__ = ["CANDIDATE_TOLERANCE", "CMA_SHARE", "DISTINCT_DEGREES", "OPTIMIZERS",
 #: best pose upright and at the candidate directions: never worse than the
 #: pose-only search by the objective. Half the swarm since the self-intersection
 #: is measured only for would-be bests (it was a third, when every personal best
-#: was measured in full): over 3 seeds of the 15 zoo models the objective is
-#: then 1.007x the one of the search before both changes, in about half its time.
+#: was measured in full): over 5 seeds of the 15 zoo models the objective is
+#: then 0.999x the one of the search before both changes (the dragon 1.20x, the
+#: worst), in 0.56x its time (benchmarks/RESULTS.md, "Speed targets").
 TURN_SHARE = 2
 
 @dataclass
