@@ -428,8 +428,8 @@ def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
 
 @njit(parallel=True, cache=True)
 def _skin_blocks3(start, bone, coef, T, out):  # pragma: no cover - compiled
-    # per vertex, per bone of its row: the 4 coefficients against the bone's 4 rows of T, three named sums; the
-    # same additions in the same order as a loop over the CSR's non-zeros (a missing one adds 0.0), with one
+    # per vertex, per bone of its row: the 4 coefficients against the bone's 4 rows of T (a planar rig's padded
+    # with zeros), three named sums; the same additions in the same order as a loop over the CSR's non-zeros (a missing one adds 0.0), with one
     # index per bone instead of one per non-zero and the bone's rows of T read together
     for p in prange(T.shape[0]):
         Tp = T[p]
@@ -455,28 +455,6 @@ def _skin_blocks3(start, bone, coef, T, out):  # pragma: no cover - compiled
                 x += c3 * Tp[j + 3, 0]
                 y += c3 * Tp[j + 3, 1]
                 z += c3 * Tp[j + 3, 2]
-            out[p, i, 0] = x
-            out[p, i, 1] = y
-            out[p, i, 2] = z
-
-
-@njit(parallel=True, cache=True)
-def _skin_blocks(start, bone, coef, T, out):  # pragma: no cover - compiled
-    # :func:`_skin_blocks3` for any block width (a planar rig: 3)
-    s = coef.shape[1]
-    for p in prange(T.shape[0]):
-        Tp = T[p]
-        for i in range(len(start) - 1):
-            x = 0.0
-            y = 0.0
-            z = 0.0
-            for k in range(start[i], start[i + 1]):
-                j = s * bone[k]
-                for a in range(s):
-                    c = coef[k, a]
-                    x += c * Tp[j + a, 0]
-                    y += c * Tp[j + a, 1]
-                    z += c * Tp[j + a, 2]
             out[p, i, 0] = x
             out[p, i, 1] = y
             out[p, i, 2] = z
@@ -560,15 +538,18 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     single = T.ndim == 2
     T = T[None] if single else T
     d = T.shape[2]
-    if d < 3:  # a planar rig: a zero third column, one kernel
-        T = np.concatenate([T, np.zeros(T.shape[:2] + (3 - d,))], axis=2)
-    T = np.ascontiguousarray(T, np.float64)
-    out = np.empty((T.shape[0], M.shape[0], 3))
     # the blocks are kept on the matrix (computed once; the LBS operators are never modified in place)
+    # (a planar rig's blocks padded to 4 coefficients)
     blocks = getattr(M, "_supportless_bone_blocks", None)
-    if blocks is None or blocks[2].shape[1] != d + 1:
-        blocks = bone_blocks(M, d + 1)
-        M._supportless_bone_blocks = blocks
-    (_skin_blocks3 if d == 3 else _skin_blocks)(*blocks, T, out)
+    if blocks is None:
+        start, bone, coef = bone_blocks(M, d + 1)
+        blocks = M._supportless_bone_blocks = (start, bone, np.pad(coef, ((0, 0), (0, 3 - d))))
+    if d < 3:  # a planar rig: T (m*3, 2) -> (m*4, 3) with a zero row per bone and a zero column, one kernel
+        P, m = T.shape[0], T.shape[1] // (d + 1)
+        T4 = np.zeros((P, m, 4, 3))
+        T4[:, :, : d + 1, :d] = T.reshape(P, m, d + 1, d)
+        T = T4.reshape(P, 4 * m, 3)
+    out = np.empty((T.shape[0], M.shape[0], 3))
+    _skin_blocks3(*blocks, np.ascontiguousarray(T, np.float64), out)
     out = out[..., :d] if d < 3 else out
     return out[0] if single else out

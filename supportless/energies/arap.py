@@ -276,23 +276,18 @@ def _stack_transforms(transforms: np.ndarray, m: int, d: int) -> np.ndarray:
 
 
 @njit(cache=True)
-def _rotation_term_jacobi(S, g, d):
-    """:func:`_rotation_term` by one-sided Jacobi (Hestenes) orthogonalisation.
+def _rotation_term_jacobi(S, g, det):
+    """:func:`_rotation_term` of a 3 x 3 block by one-sided Jacobi (Hestenes) orthogonalisation.
 
     The singular values of the columns come to high relative accuracy; the
-    determinant's sign comes from ``S`` itself. Slower (an allocation and a
-    few sweeps per block), robust where the fast form is not.
+    sign of the smallest is that of ``det`` (``det S_g``). Slower (an
+    allocation and a few sweeps per block), robust where the fast form is not.
     """
+    d = 3
     a = np.empty((3, 3))
     for r in range(d):
         for c in range(d):
             a[r, c] = S[r, g, c]
-    if d == 3:
-        det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
-               - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
-               + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
-    else:
-        det = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
     for sweep in range(30):
         rotated = False
         for p in range(d - 1):
@@ -399,7 +394,7 @@ def _rotation_term(S, g, d):
             break
     x2 = x * x
     if (4.0 * x2 + 2.0 * c2) * x + c1 < 1e-2 * x2 * x:  # p'(x) = prod(x - other roots): one is within ~x/10
-        return _rotation_term_jacobi(S, g, 3)
+        return _rotation_term_jacobi(S, g, det)
     return x
 
 
