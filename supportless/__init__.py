@@ -18,7 +18,8 @@ from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.support import support_volume
 from .errors import InputError, SupportlessError
-from .io import read_mesh, read_pose, read_tgf, write_mesh, write_pose, write_tgf
+from .io import read_mesh, read_tgf, write_mesh, write_tgf
+from .posefile import read_pose, write_pose
 from .kinematics import forward_kinematics, lbs_matrix, skin
 from .objective import Objective
 from .rig import Rig, load_rig, prepare_rig

@@ -108,10 +108,13 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
         The batch's output folder.
     settings : dict
         :class:`supportless.settings.SearchSettings` fields.
-    up, height_mm, cache_dir
+    up, cache_dir
         As for :func:`supportless.rig.load_rig`.
+    height_mm : float, optional
+        The printed height of the rest pose (:func:`supportless.printframe.print_frame`;
+        default 60 mm): the STL is written +Z up, in millimetres, on the plate.
     slice_check : bool
-        Also slice the rest and the found pose with PrusaSlicer.
+        Also slice the rest pose and the written STL with PrusaSlicer.
 
     Returns
     -------
@@ -146,18 +149,22 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
 
 
 def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cache_dir, slice_check) -> dict:
-    from .io import write_mesh, write_pose
-    from .report import build_report, write_pictures
+    from .io import write_mesh
+    from .posefile import write_pose
+    from .printframe import rig_print_frame
+    from .report import build_report, support_headline, write_pictures
     from .rig import load_rig
     from .search import optimize
     from .settings import SearchSettings
 
-    rig = load_rig(spec.mesh, spec.skeleton, up, cache_dir=cache_dir, height_mm=height_mm)
+    rig = load_rig(spec.mesh, spec.skeleton, up, cache_dir=cache_dir)
+    frame = rig_print_frame(rig, height_mm)
     result = optimize(rig, SearchSettings.from_dict(settings))
-    report = build_report(rig, result)
-    write_mesh(folder / f"{spec.name}.stl", result.print_vertices, rig.faces)
+    report = build_report(rig, result, frame)
+    stl = folder / f"{spec.name}.stl"
+    write_mesh(stl, frame.place(result.print_vertices), rig.faces)
     write_pose(folder / f"{spec.name}.pose.json", result.angles, rig.bones, rig.joints, rotation=result.rotation,
-               extra={"objective": result.value})
+               extra={"objective": result.value, "print_frame": frame.to_dict()})
     write_pictures(folder, rig, result, report)
     predicted = report.get("predicted_slicer") or {}
     row = {"model": spec.name, "status": "ok", "reason": "",
@@ -168,8 +175,9 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     if slice_check and rig.dim == 3:
         from .slicer import slice_check as slice_pair
 
-        sliced = slice_pair((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up).to_dict()
-        report["slice_check"] = sliced
+        sliced = slice_pair((frame.place(rig.vertices), rig.faces), stl, up=(0.0, 0.0, 1.0), height_mm=None).to_dict()
+        report["slice_check"] = sliced | {"sliced_file": stl.name}
+        report["support"] = support_headline(report)
         row |= {"slicer_before_mm": sliced["before"]["support_mm"], "slicer_after_mm": sliced["after"]["support_mm"],
                 "slicer_reduction": None if sliced["reduction_percent"] is None else sliced["reduction_percent"] / 100}
     write_json(folder / "report.json", report)

@@ -16,7 +16,7 @@ import numpy as np
 
 from .cli_batch import batch
 from .cli_common import (EXIT_INTERRUPTED, EXIT_MISSING_TOOL, EXIT_WRITE_FAILED, _console, _fail, _Group, _load,
-                         _printer_profile, _require_slicer, _search_options, _settings, rig_options)
+                         _printer_profile, _require_slicer, _say_frame, _search_options, _settings, rig_options)
 from .errors import InputError
 from .interrupt import deferred_interrupt, requested as interrupt_requested
 from .paths import check_output_paths
@@ -34,10 +34,10 @@ def main():
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @rig_options
-def prepare(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir):
+def prepare(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir):
     """Tetrahedralise MODEL and compute its skinning weights (cached)."""
     t0 = time.perf_counter()
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
+    rig, _ = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm, keep_units=keep_units)
     dt = time.perf_counter() - t0
     source = "from the cache" if rig.info.get("from_cache") else "prepared"
     click.echo(f"{rig.name}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
@@ -52,15 +52,16 @@ def _run_search(rig, console, settings, quiet=False):
 
     from .search import optimize
 
-    progress = Progress(TextColumn("[bold]search"), BarColumn(bar_width=16), MofNCompleteColumn(),
-                        TimeElapsedColumn(), TextColumn("{task.fields[status]}"), console=console, disable=quiet,
-                        transient=False)
+    progress = Progress(TextColumn("[bold]search[/bold] {task.fields[phase]}"), BarColumn(bar_width=16),
+                        MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.fields[status]}"),
+                        console=console, disable=quiet, transient=False)
     with progress:
-        task = progress.add_task("search", total=settings.iterations, status="")
+        # the whole search's iterations (every phase, the polish) are known from its first report on
+        task = progress.add_task("search", total=None, status="", phase="")
 
         def callback(it, info):
             t = info["terms"]
-            progress.update(task, total=info["iterations"], completed=it,
+            progress.update(task, total=info["iterations"], completed=it, phase=info.get("phase", ""),
                             status=f"best {info['value']:.4f} = arap {t['arap']:.3f} "
                                                        f"· overhang {t['overhang']:.3f} "
                                                        f"· intersect {t['intersection']:.3f}")
@@ -89,31 +90,46 @@ def _run_front(rig, console, settings, count, method, quiet=False):
     return front
 
 
-def _summary_table(report: dict):
+def _summary_table(report: dict, verbose: bool = False):
+    """The rest pose against the found pose; the support estimates only when ``verbose``.
+
+    Volumes and areas are shown in the print frame's millimetres (the report
+    keeps them in the model's units).
+    """
     from rich.table import Table
 
     b, a, red = report["before"], report["after"], report["reduction_percent"]
+    scale = (report.get("print_frame") or {}).get("scale", 1.0)
 
     def pct(x):  # a reduction of 40 % shows as -40.0 %
         return "-" if x is None else f"{-x:+.1f} %"
 
+    def cm3(x):  # a volume of the model's units^3, in cm3 as printed
+        return f"{x * scale ** 3 / 1000:,.2f} cm3"
+
+    def mm3(x):
+        return f"{x * scale ** 3:,.1f} mm3"
+
     table = Table(title=f"{report['model']}: rest pose vs found pose")
     for col in ("measure", "before", "after", "change"):
         table.add_column(col, justify="right" if col != "measure" else "left")
-    predicted = report.get("predicted_slicer")
-    if predicted:
-        fraction = predicted["reduction"]
-        table.add_row(f"support filament, PrusaSlicer predicted ({predicted['height_mm']:g} mm tall)",
-                      f"{predicted['before_mm']:.0f} mm", f"{predicted['after_mm']:.0f} mm",
-                      pct(None if fraction is None else 100 * fraction))
-    table.add_row("support, prism estimate", f"{b['support_prism']:.4g}", f"{a['support_prism']:.4g}",
-                  pct(red["support_prism"]))
-    table.add_row("support, column estimate", f"{b['support_column']:.4g}", f"{a['support_column']:.4g}",
-                  pct(red["support_column"]))
-    table.add_row("risky area", f"{b['risky_area']:.4g}", f"{a['risky_area']:.4g}", pct(red["risky_area"]))
-    table.add_row("distortion (ARAP / volume)", f"{b['terms']['arap']:.4g}", f"{a['terms']['arap']:.4g}", "")
-    table.add_row("self-intersection volume", f"{b['self_intersection_volume']:.4g}",
-                  f"{a['self_intersection_volume']:.4g}", "")
+    if verbose:
+        predicted = report.get("predicted_slicer")
+        if predicted:
+            fraction = predicted["reduction"]
+            table.add_row(f"estimate: PrusaSlicer's support filament ({predicted['height_mm']:g} mm tall)",
+                          f"{predicted['before_mm']:,.0f} mm", f"{predicted['after_mm']:,.0f} mm",
+                          pct(None if fraction is None else 100 * fraction))
+        table.add_row("estimate: support volume (prisms)", cm3(b["support_prism"]), cm3(a["support_prism"]),
+                      pct(red["support_prism"]))
+        table.add_row("estimate: support volume (columns)", cm3(b["support_column"]), cm3(a["support_column"]),
+                      pct(red["support_column"]))
+        table.add_row("area needing support", f"{b['risky_area'] * scale ** 2:,.0f} mm2",
+                      f"{a['risky_area'] * scale ** 2:,.0f} mm2", pct(red["risky_area"]))
+    table.add_row("distortion (ARAP / volume)", f"{b['terms']['arap']:.3f}", f"{a['terms']['arap']:.3f}", "")
+    table.add_row("self-intersection volume", mm3(b["self_intersection_volume"]),
+                  mm3(a["self_intersection_volume"]), "")
+
     def pairs(x):
         return "n/a (2D)" if x is None or x < 0 else str(x)
 
@@ -128,27 +144,32 @@ def _summary_table(report: dict):
         up = report["up"]
         table.add_row("printed turned by", "0°", f"{rot['angle_deg']:.0f}°",
                       f"model {[round(x, 2) for x in rot['printing_direction_in_model_frame']]} up, was {up}")
-        table.add_row("support standing (prism)", f"{b['support_prism']:.4g}", f"{a['upright']['support_prism']:.4g}",
-                      pct(None if b["support_prism"] <= 0 else
-                          100 * (1 - a["upright"]["support_prism"] / b["support_prism"])))
+        if verbose:
+            table.add_row("estimate: support standing (prisms)", cm3(b["support_prism"]),
+                          cm3(a["upright"]["support_prism"]),
+                          pct(None if b["support_prism"] <= 0 else
+                              100 * (1 - a["upright"]["support_prism"] / b["support_prism"])))
     return table
 
 
-def _write_outputs(rig, result, report, output, pose, report_path, pictures, upright=None):
+def _write_outputs(rig, result, report, output, pose, report_path, pictures, frame, upright=None):
     """Write the posed mesh (print orientation), the upright mesh, the pose, the pictures and the report.
 
-    A file that cannot be written is one line on stderr; the others are
-    still written. Returns ([(label, path)] written, number that failed).
+    Meshes are written in the print frame ``frame`` (+Z up, mm, on the plate);
+    a glTF asset stays glTF. A file that cannot be written is one line on
+    stderr; the others are still written. Returns ([(label, path)] written,
+    number that failed).
     """
-    from .io import write_json, write_pose
+    from .io import write_json
+    from .posefile import write_pose
     from .report import write_pictures
 
     def posed(path, vertices, standing_label=False):
-        kind = _write_posed(path, rig, result.angles, result.vertices, vertices)
+        kind = _write_posed(path, rig, result.angles, result.vertices, vertices, frame)
         return [(f"posed {kind.replace('as printed', 'standing') if standing_label else kind}", path)]
 
     def pose_file():
-        extra = {"objective": result.value}
+        extra = {"objective": result.value, "print_frame": frame.to_dict()}
         if rig.labels is not None:
             extra["bone_names"] = rig.bone_names()
         write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation)
@@ -186,8 +207,8 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @rig_options
 @_search_options
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
-              help="Posed mesh to write in its print orientation, lowest point on the plate, up along --up "
-                   "(.stl, .obj, .ply, .off, .3mf, .glb).")
+              help="Posed mesh to write in its print orientation: +Z up, in millimetres, on the plate, centred "
+                   "(.stl, .3mf, .obj, .ply, .off; .glb: glTF's +Y up, metres).")
 @click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
               help="Also write the posed mesh standing as the input stood.")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="JSON report.")
@@ -195,7 +216,7 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--pictures", type=click.Path(file_okay=False), default=None,
               help="Folder for before/after pictures and the convergence plot.")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
-              help="Measure support with PrusaSlicer before and after (needs prusa-slicer).")
+              help="Slice the rest pose and the written file with PrusaSlicer (needs prusa-slicer).")
 @click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=1), default=1, show_default=True,
               help="Slice up to K distinct good poses the search found (its best among them) with PrusaSlicer, "
                    "two at a time, and keep the one with the least support (needs prusa-slicer).")
@@ -205,8 +226,10 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--pareto-method", type=click.Choice(["nsga2", "sweep"]), default="nsga2", show_default=True,
               help="How the front is found: NSGA-II after the single search, or a sweep of the distortion weight.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
-def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, output, upright_out, report_path, pose,
-             pictures, slice_check_flag, slice_rank_count, pareto_count, pareto_method, quiet, **search_options):
+@click.option("--verbose", "-v", is_flag=True, help="Also show the support estimates (prisms, columns, predicted).")
+def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, output, upright_out,
+             report_path, pose, pictures, slice_check_flag, slice_rank_count, pareto_count, pareto_method, quiet,
+             verbose, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from .report import build_report
 
@@ -229,9 +252,12 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
     if slice_rank_count > 1:
         _require_slicer("--slice-rank")
     _check_bones_early(settings, model, skeleton)
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm)
+    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units)
     if slice_rank_count > 1 and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
+    if slice_check_flag and rig.dim != 3:
+        _fail(f"{model}: --slice-check slices 3D models only; this one is planar")
+    _say_frame(rig, frame, quiet)
     with deferred_interrupt():  # Ctrl-C stops the search; what it found is still written
         front = _run_front(rig, console, settings, pareto_count, pareto_method, quiet) if pareto_count else None
         result = front.default if front else _run_search(rig, console, settings, quiet)
@@ -239,28 +265,29 @@ def optimize(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir,
             console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
         extra = {"printer_profile": profile.summary()}
         if slice_rank_count > 1 and not result.interrupted:
-            ranked = _slice_rank(rig, result, slice_rank_count, console, profile)
+            ranked = _slice_rank(rig, result, slice_rank_count, console, profile, frame)
             if ranked is not None:
                 result, extra["slice_rank"] = ranked.result, ranked.to_dict()
         if front is not None:
             from .pareto import write_front
 
-            extra["pareto"], front_written = write_front(rig, front, output)
+            extra["pareto"], front_written = write_front(rig, front, output, frame)
             extra["pareto_seconds"] = front.seconds
-        report = build_report(rig, result) | extra
-        written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures,
+        report = build_report(rig, result, frame) | extra
+        written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures, frame,
                                          upright=upright_out)
         if front is not None:
             written += front_written
-    _print_results(console, report)  # after the files: a closed stdout (| head) loses nothing
+    stopped = result.interrupted or interrupt_requested()
+    if slice_check_flag and not failed and not stopped:  # the slicer's figures lead the summary
+        report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile)
+    _print_results(console, report, verbose)  # after the files: a closed stdout (| head) loses nothing
     console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
-    if result.interrupted or interrupt_requested():
+    if stopped:
         click.echo("supportless: interrupted: the best pose found so far is written", err=True)
         sys.exit(EXIT_INTERRUPTED)
-    if slice_check_flag:
-        _slice_and_report(rig, result, report, report_path, console, profile=profile)
 
 
 def _check_bones_early(settings, model, skeleton) -> None:
@@ -272,14 +299,14 @@ def _check_bones_early(settings, model, skeleton) -> None:
         settings.check_bones(len(read_tgf(tgf)[1]))
 
 
-def _slice_rank(rig, result, count, console, profile):
+def _slice_rank(rig, result, count, console, profile, frame):
     """Slice the search's distinct good poses and keep the cheapest (see :func:`supportless.ranking.slice_rank`)."""
     from .ranking import slice_rank
     from .slicer import SlicerError
 
     console.print(f"slicing up to {count} distinct good poses with PrusaSlicer, two at a time ...")
     try:
-        ranked = slice_rank(rig, result, count, profile=profile)
+        ranked = slice_rank(rig, result, count, profile=profile, height_mm=frame.height_mm)
     except SlicerError as exc:
         if interrupt_requested():  # Ctrl-C reached the slicer too: keep the search's own pose
             console.print("[yellow]interrupted: slice-ranking skipped, writing the search's pose[/yellow]")
@@ -295,20 +322,28 @@ def _slice_rank(rig, result, count, console, profile):
     return ranked
 
 
-def _print_results(console, report):
-    """The before/after table and the search time."""
-    console.print(_summary_table(report))
+def _print_results(console, report, verbose=False):
+    """The one support figure, the before/after table and the search time."""
+    headline = report.get("support")
+    if headline:
+        console.print(headline["line"])
+    console.print(_summary_table(report, verbose))
     console.print(f"search took {report['runtime_seconds']:.1f} s")
 
 
-def _slice_and_report(rig, result, report, report_path, console, required=True, height_mm=60.0, profile=None):
-    """Slice the rest and the found pose with PrusaSlicer, after every output is written.
+def _slice_and_report(rig, result, report, report_path, console, frame, printed=None, required=True, profile=None):
+    """Slice the rest pose and the file written for printing with PrusaSlicer, after every output is written.
 
-    The slicer's figures are printed and added to the report file. A missing
-    or failing slicer is one line and exit status 3 when ``required``; the
-    outputs already written stay.
+    The rest pose is sliced in the print frame ``frame``; the found pose is
+    ``printed`` itself, read back as a user's slicer opens it, when it is a
+    mesh file (else the same vertices placed by ``frame``). Returns the report
+    with ``slice_check`` and its ``support`` headline, also written to
+    ``report_path``. A missing or failing slicer is one line and exit status 3
+    when ``required`` (the outputs already written stay), else the report
+    unchanged.
     """
-    from .io import write_json
+    from .io import read_mesh, write_json
+    from .report import support_headline
     from .slicer import SlicerError, find_prusa_slicer, slice_check
 
     if not find_prusa_slicer():
@@ -317,24 +352,23 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
             click.echo(f"supportless: error: {message}; the other outputs are written", err=True)
             sys.exit(EXIT_MISSING_TOOL)
         console.print(message)
-        return None
-    console.print("slicing the rest pose standing and the found pose as printed with PrusaSlicer ...")
-    up3 = np.append(rig.up, 0.0) if rig.dim == 2 else rig.up
+        return report
+    console.print("slicing the rest pose and the written file as printed with PrusaSlicer ...")
+    from_file = printed is not None and Path(printed).suffix.lower() in (".stl", ".3mf", ".obj", ".ply", ".off")
     try:
-        sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=up3,
-                             height_mm=height_mm, profile=profile).to_dict()
+        posed = read_mesh(printed) if from_file else (frame.place(result.print_vertices), rig.faces)
+        sliced = slice_check((frame.place(rig.vertices), rig.faces), posed, up=(0.0, 0.0, 1.0), height_mm=None,
+                             profile=profile).to_dict()
     except SlicerError as exc:
         click.echo(f"supportless: error: slice check failed: {exc}; the other outputs are written", err=True)
         sys.exit(EXIT_MISSING_TOOL)
-    red = sliced["reduction_percent"]
-    change = "no support before" if red is None else f"{red:.1f} % less"
-    console.print(f"PrusaSlicer support filament at {sliced['height_mm']:g} mm tall: "
-                  f"{sliced['before']['support_mm']:.0f} mm -> {sliced['after']['support_mm']:.0f} mm ({change}); "
-                  f"{_grams_and_time(sliced['before'])} -> {_grams_and_time(sliced['after'])}")
+    sliced["sliced_file"] = str(printed) if from_file else None
+    report = report | {"slice_check": sliced}
+    report["support"] = support_headline(report)
     if report_path:
-        write_json(report_path, report | {"slice_check": sliced})
+        write_json(report_path, report)
         console.print(f"  report with the slicer's figures: {report_path}")
-    return sliced
+    return report
 
 
 # --------------------------------------------------------------------------- #
@@ -343,32 +377,46 @@ def _slice_and_report(rig, result, report, report_path, console, required=True, 
 @rig_options
 @click.option("--pose", type=click.Path(dir_okay=False), required=True, help="Pose JSON from `optimize --pose`.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
-              help="Posed mesh to write, in the pose's print orientation.")
+              help="Posed mesh to write, in the pose's print orientation: +Z up, in millimetres, on the plate.")
 @click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
               help="Also write the posed mesh standing as the input stood.")
-def apply(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, pose, output, upright_out):
-    """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh."""
+def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, pose, output, upright_out):
+    """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh.
+
+    The mesh is printed as tall as the pose file says (the height `optimize`
+    wrote it at) unless --height-mm or --keep-units says otherwise.
+    """
     from .geometry import place_on_plate, print_pose
-    from .io import read_pose, read_print_rotation
+    from .posefile import read_pose, read_pose_print_frame, read_print_rotation
 
     for path in (output, upright_out):
         _check_mesh_path(path)
     check_output_paths([("-o", output), ("--upright-out", upright_out)], (),
                        _inputs(model, skeleton, tets, weights, pose))
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
+    saved = read_pose_print_frame(pose)
+    if height_mm is None and not keep_units and saved is not None:
+        keep_units = saved["how"] == "units"
+        height_mm = None if keep_units else saved["height_mm"]
+    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
+                       keep_units=keep_units)
     angles = read_pose(pose, rig.bones)
     R = read_print_rotation(pose, rig.dim)
+    _say_frame(rig, frame)
     standing = place_on_plate(rig.pose(angles), rig.up)
     for path, printed in ((output, True), (upright_out, False)):
         if path:
-            _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing)
+            _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing,
+                         frame)
             click.echo(f"wrote {path}")
 
 
-def _write_posed(path, rig, angles, standing, vertices) -> str:
+def _write_posed(path, rig, angles, standing, vertices, frame) -> str:
     """Write a posed model: the posed asset for a glTF rig written as .glb/.gltf, else the mesh ``vertices``.
 
-    Returns what was written ("asset, standing" or "mesh, as printed"/"mesh").
+    A mesh file is written in the print frame ``frame`` (+Z up, mm, on the
+    plate, centred); a .glb of a mesh that came without glTF in glTF's own
+    frame (+Y up, metres). Returns what was written ("asset, standing" or
+    "mesh, as printed"/"mesh").
     """
     from .gltf import is_gltf, posed_joint_transforms, write_posed_gltf
     from .io import write_mesh
@@ -379,7 +427,8 @@ def _write_posed(path, rig, angles, standing, vertices) -> str:
         T = posed_joint_transforms(rig.transforms(angles), np.asarray(source["driver"]), source["scale"], offset)
         write_posed_gltf(source["path"], path, T, np.asarray(source["joint_nodes"]))
         return "glTF asset, standing (its skin posed)"
-    write_mesh(path, vertices, rig.faces)
+    placed = frame.to_gltf(vertices) if is_gltf(path) and rig.dim == 3 else frame.place(vertices)
+    write_mesh(path, placed, rig.faces)
     return "mesh, as printed" if vertices is not standing else "mesh"
 
 
@@ -413,23 +462,30 @@ def _grams_and_time(side: dict) -> str:
 @main.command(name="slice-check")
 @click.argument("original", type=click.Path(dir_okay=False))
 @click.argument("posed", type=click.Path(dir_okay=False))
-@click.option("--up", default="y", show_default=True, help="Printing direction of both meshes.")
+@click.option("--up", default="y", show_default=True, help="Printing direction of ORIGINAL.")
 @click.option("--height-mm", default=60.0, show_default=True, type=click.FloatRange(min=1.0),
-              help="The original is scaled to this height along up; the posed mesh by the same factor.")
+              help="ORIGINAL is scaled to this height along --up.")
+@click.option("--posed-as", type=click.Choice(["written", "original"]), default="written", show_default=True,
+              help="written: POSED is a print file (as `optimize -o` writes it: +Z up, millimetres) and is sliced "
+                   "as it is; original: POSED is in ORIGINAL's frame and units (its --up, the same scale).")
 @click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
               help="PrusaSlicer config (.ini) to slice with [default: PrusaSlicer's defaults].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def slice_check_cmd(original, posed, up, height_mm, printer_profile, as_json):
+def slice_check_cmd(original, posed, up, height_mm, posed_as, printer_profile, as_json):
     """Measure the support PrusaSlicer lays down for ORIGINAL and POSED."""
     from .geometry import parse_up
     from .io import read_mesh
+    from .printframe import print_frame
     from .slicer import SlicerError, SlicerNotFound, slice_check
 
     up_vec = parse_up(up)
     profile = _printer_profile(printer_profile) if printer_profile else None
-    meshes = [read_mesh(original), read_mesh(posed)]
+    (Vo, Fo), (Vp, Fp) = read_mesh(original), read_mesh(posed)
+    frame = print_frame(Vo, up_vec, height_mm)
+    placed = (frame.place(Vp) if posed_as == "original" else Vp, Fp)
     try:
-        report = slice_check(meshes[0], meshes[1], up=up_vec, height_mm=height_mm, profile=profile).to_dict()
+        report = slice_check((frame.place(Vo), Fo), placed, up=(0.0, 0.0, 1.0), height_mm=None,
+                             profile=profile).to_dict()
     except (SlicerNotFound, SlicerError) as exc:
         _fail(str(exc))
     if as_json:
@@ -457,12 +513,18 @@ def slice_check_cmd(original, posed, up, height_mm, printer_profile, as_json):
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0))
 @click.option("--quiet", "-q", is_flag=True)
 def demo(out_dir, figure, particles, iterations, seed, quiet):
-    """Run the whole pipeline on a built-in figure and write its files."""
+    """Run the whole pipeline on a built-in figure and write its files.
+
+    The demo's search is a quick one (60 particles x 40 iterations by
+    default); `supportless optimize` runs the full 200 x 120.
+    """
     from .energies.overhang import risky_faces
     from .io import write_mesh, write_tgf
+    from .printframe import rig_print_frame
     from .render import render_mesh
     from .report import build_report
     from .rig import load_rig
+    from .settings import SearchSettings
 
     settings = _settings(particles=particles, iterations=iterations, seed=seed)
     check_output_paths((), [("--out", out_dir)])
@@ -473,27 +535,32 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     console.print(f"{figure}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
                   f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones; "
                   f"rig ready in {time.perf_counter() - t0:.1f} s")
+    frame = rig_print_frame(rig)
+    console.print(f"{frame.note()}")
     rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"
-    write_mesh(rest_mesh, rig.vertices, rig.faces)
+    write_mesh(rest_mesh, frame.place(rig.vertices), rig.faces)
     write_tgf(out / f"{figure}.tgf", rig.joints, rig.bones)
     risky = risky_faces(rig.vertices, rig.faces, rig.up, settings.overhang_angle) if rig.dim == 3 else None
     rest_png = render_mesh(out / f"{figure}-rest.png", rig.vertices, rig.faces, rig.up, rig.joints, rig.bones,
                            risky=risky, title=f"{figure}: rest pose")
+    full = SearchSettings()
+    console.print(f"search: {settings.particles} particles x {settings.iterations} iterations, the demo's quick "
+                  f"search (`supportless optimize` runs {full.particles} x {full.iterations})")
     result = _run_search(rig, console, settings, quiet)
-    report = build_report(rig, result)
+    report = build_report(rig, result, frame)
     posed_ext = "stl" if rig.dim == 3 else "obj"
     report_path = out / f"{figure}-report.json"
-    written, failed = _write_outputs(rig, result, report, out / f"{figure}-posed.{posed_ext}",
-                                     out / f"{figure}-pose.json", report_path, out,
-                                     upright=out / f"{figure}-posed-standing.{posed_ext}")
+    posed_path = out / f"{figure}-posed.{posed_ext}"
+    written, failed = _write_outputs(rig, result, report, posed_path, out / f"{figure}-pose.json", report_path, out,
+                                     frame, upright=out / f"{figure}-posed-standing.{posed_ext}")
+    if rig.dim == 3 and not failed:  # the slicer's figures when PrusaSlicer is there; the demo runs without it
+        report = _slice_and_report(rig, result, report, report_path, console, frame, posed_path, required=False)
     _print_results(console, report)
     console.print(f"wrote to {out}/:")
     console.print(f"  rest mesh: {rest_mesh}\n  skeleton: {out / f'{figure}.tgf'}\n  rest picture: {rest_png}")
     console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
-    if rig.dim == 3:  # the slicer's figures when PrusaSlicer is there; the demo runs without it
-        _slice_and_report(rig, result, report, report_path, console, required=False)
 
 
 # --------------------------------------------------------------------------- #
@@ -503,7 +570,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
 @click.option("--demo", "demo_figure", is_flag=True, help="Open the built-in tpose figure.")
 @click.option("--port", default=None, type=click.IntRange(1, 65535), help="Port (default: a free one from 8080).")
 @click.option("--host", default="127.0.0.1", show_default=True, help="Address to bind.")
-def view(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, demo_figure, port, host):
+def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, demo_figure, port, host):
     """Pose MODEL in the browser: live supports, optimize, export."""
     from .ui.app import run_app
 
@@ -511,8 +578,10 @@ def view(model, skeleton, up, tets, weights, height_mm, no_cache, cache_dir, dem
         model = "demo:tpose"
     if model is None:
         _fail("give a MODEL (with --skeleton) or --demo")
-    rig = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm)
-    run_app(rig, host=host, port=port, block=True)
+    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
+                       keep_units=keep_units)
+    _say_frame(rig, frame)
+    run_app(rig, host=host, port=port, block=True, frame=frame)
 
 
 # --------------------------------------------------------------------------- #

@@ -13,6 +13,7 @@ import click
 import numpy as np
 
 from .errors import SupportlessError
+from .printframe import DEFAULT_HEIGHT_MM
 from .terminal import ClosableStdout, drop_stdout
 
 EXIT_USER_ERROR = 2
@@ -35,15 +36,24 @@ def _console():
     return Console(file=ClosableStdout(sys.stdout), highlight=False)
 
 
-def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None):
+def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None,
+          keep_units=False):
+    """The rig of MODEL and its print frame (:mod:`supportless.printframe`; :func:`_say_frame` says it).
+
+    The rig stays in the file's units; ``height_mm`` and ``keep_units`` only
+    choose how the files are printed.
+    """
+    from .printframe import rig_print_frame
     from .rig import load_rig
 
     def progress(msg):
         if not quiet:
             click.echo(f"  {msg} ...", err=True)
 
+    if keep_units and height_mm is not None:
+        _fail("--keep-units and --height-mm do not go together; choose one")
     rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
-                   progress=progress, height_mm=height_mm)
+                   progress=progress)
     source = rig.info.get("gltf")
     if source is not None:  # what was done to the glTF asset, one line per step
         for line in source["log"]:
@@ -53,11 +63,15 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
         if source is not None and warning in source["log"] and not warning.startswith("warning"):
             continue
         click.echo(f"supportless: warning: {rig.name}: {warning.removeprefix('warning: ')}", err=True)
-    if source is not None and not quiet:
-        h = float(np.ptp(rig.vertices @ rig.up))
-        click.echo(f"  print body {h:.1f} mm tall" + ("" if height_mm else " (glTF metres as millimetres; "
-                                                      "--height-mm H scales it)"), err=True)
-    return rig
+    return rig, rig_print_frame(rig, height_mm, keep_units)
+
+
+def _say_frame(rig, frame, quiet=False) -> None:
+    """The printed size in one line on stderr (unless ``quiet``); a size far from a figure's is a warning."""
+    if not quiet:
+        click.echo(f"  {frame.note()}", err=True)
+    if (unusual := frame.unusual()) is not None:
+        click.echo(f"supportless: warning: {rig.name}: {unusual}", err=True)
 
 
 def rig_options(f):
@@ -65,9 +79,12 @@ def rig_options(f):
     f = click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
                      help="Rig cache folder (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")(f)
     f = click.option("--no-cache", is_flag=True, help="Prepare the rig again; do not read or write the cache.")(f)
+    f = click.option("--keep-units", is_flag=True,
+                     help="Print the model at the file's own size, its units read as millimetres (glTF metres "
+                          "become millimetres).")(f)
     f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
-                     help="Scale the model to this height along --up, in millimetres (default: as read; "
-                          "glTF metres become millimetres).")(f)
+                     help=f"Print the rest pose this tall along --up, in millimetres [default: {DEFAULT_HEIGHT_MM:g}]. "
+                          "Written files are +Z up, in millimetres, on the plate.")(f)
     f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
                      help="Precomputed skinning weights (.dmat, one row per --tets vertex); for a glTF model "
                           "'skin' (its own weights, the default) or 'bbw' (recomputed).")(f)

@@ -45,6 +45,7 @@ import numpy as np
 from .energies.exact import self_intersects
 from .energies.slicer_model import predicted_support_mm
 from .geometry import place_on_plate, print_pose
+from .printframe import PrintFrame, rig_print_frame
 from .report import PREDICTION_HEIGHT_MM
 from .rig import Rig
 from .orientation import orientation_params, rotations_from_params
@@ -403,8 +404,12 @@ def front_paths(output: str | os.PathLike, count: int) -> tuple[list[Path], list
     return meshes, poses, Path(f"{stem}-front.png")
 
 
-def write_front(rig: Rig, front: Front, output: str | os.PathLike) -> tuple[list[dict], list[tuple[str, str]]]:
+def write_front(rig: Rig, front: Front, output: str | os.PathLike,
+                frame: PrintFrame | None = None) -> tuple[list[dict], list[tuple[str, str]]]:
     """Write the front's meshes (print orientation), poses and gallery beside ``output``.
+
+    The meshes are print files in ``frame`` (default: the rig's, 60 mm tall):
+    +Z up, millimetres, on the plate; a ``.glb`` is glTF's +Y up, metres.
 
     Returns
     -------
@@ -414,16 +419,20 @@ def write_front(rig: Rig, front: Front, output: str | os.PathLike) -> tuple[list
     written : list of (str, str)
         ``(label, path)`` of each file.
     """
-    from .io import write_mesh, write_pose
+    from .io import write_mesh
+    from .posefile import write_pose
     from .render import render_front
 
+    frame = rig_print_frame(rig) if frame is None else frame
     meshes, poses, gallery = front_paths(output, len(front.poses))
     entries, written = [], []
     for p, mesh, pose in zip(front.poses, meshes, poses):
         r = p.result
-        write_mesh(mesh, r.print_vertices, rig.faces)
+        glb = Path(mesh).suffix.lower() in (".glb", ".gltf") and rig.dim == 3
+        write_mesh(mesh, frame.to_gltf(r.print_vertices) if glb else frame.place(r.print_vertices), rig.faces)
         write_pose(pose, r.angles, rig.bones, rig.joints, rotation=r.rotation,
-                   extra={"objective": r.value, "support": p.support, "distortion": p.distortion})
+                   extra={"objective": r.value, "support": p.support, "distortion": p.distortion,
+                          "print_frame": frame.to_dict()})
         entries.append(p.to_dict() | {"mesh": str(mesh), "pose": str(pose)})
         written += [(f"front pose {len(entries)} mesh", str(mesh)), (f"front pose {len(entries)} pose", str(pose))]
     if front.poses:

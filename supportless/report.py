@@ -20,11 +20,15 @@ from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.slicer_model import predicted_support_mm
 from .energies.support import support_volume
+from .gcode import FILAMENT_DIAMETER_MM, mm_to_cm3
 from .geometry import place_on_plate, print_transform
 from .orientation import print_direction, rotation_axis_angle
+from .printframe import DEFAULT_HEIGHT_MM, PrintFrame, rig_print_frame
+from .profile import DEFAULT_DENSITY
 from .render import plot_convergence, render_before_after
 
-__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "pose_measures", "predicted_slicer", "reduction", "write_pictures"]
+__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "pose_measures", "predicted_slicer", "reduction", "support_headline",
+           "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -107,8 +111,8 @@ def reduction(before: float, after: float) -> float | None:
     return None if before <= 0 else 100.0 * (1.0 - after / before)
 
 
-#: The printed height the report's predicted slicer filament is for (as ``slice-check``'s default), mm.
-PREDICTION_HEIGHT_MM = 60.0
+#: The printed height the report's predicted slicer filament is for when no print frame is given, mm.
+PREDICTION_HEIGHT_MM = DEFAULT_HEIGHT_MM
 
 
 def predicted_slicer(rig, result, height_mm: float = PREDICTION_HEIGHT_MM) -> dict | None:
@@ -142,13 +146,16 @@ def predicted_slicer(rig, result, height_mm: float = PREDICTION_HEIGHT_MM) -> di
             "after_mm": float(after), "reduction": None if before <= 0 else float(1.0 - after / before)}
 
 
-def build_report(rig, result) -> dict:
+def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     """The JSON report of a pose search: the rest pose and the found pose side by side.
 
     Parameters
     ----------
     rig : Rig
     result : supportless.search.PoseResult
+    frame : PrintFrame, optional
+        How the files are printed (default: :func:`~supportless.printframe.rig_print_frame`,
+        the rest pose 60 mm tall): the predicted slicer figures are for its height.
 
     Returns
     -------
@@ -156,8 +163,10 @@ def build_report(rig, result) -> dict:
         Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
         printer's threshold ``result.settings.overhang_angle``), their
         ``reduction_percent``, ``predicted_slicer`` (:func:`predicted_slicer`:
-        the support filament PrusaSlicer is predicted to lay down, 60 mm
-        tall) and its ``predicted_slicer_reduction`` (a fraction), the ``print_rotation`` and which ``frames``
+        the support filament PrusaSlicer is predicted to lay down at the
+        frame's height) and its ``predicted_slicer_reduction`` (a fraction),
+        ``support`` (:func:`support_headline`: the one support figure a user
+        reads), ``print_frame`` (the files' frame and scale), the ``print_rotation`` and which ``frames``
         the figures are in, the largest and RMS vertex displacement, each
         bone's rotation (one angle, degrees) and the largest, the Euler
         angles, runtime, settings and convergence history.
@@ -174,8 +183,9 @@ def build_report(rig, result) -> dict:
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
     turned = np.degrees(objective.prior.angles(result.angles))
-    predicted = predicted_slicer(rig, result)
-    return {
+    frame = rig_print_frame(rig) if frame is None else frame
+    predicted = predicted_slicer(rig, result, frame.height_mm)
+    report = {
         "model": rig.name,
         "vertices": int(len(rig.vertices)),
         "faces": int(len(rig.faces)),
@@ -191,6 +201,7 @@ def build_report(rig, result) -> dict:
         },
         "predicted_slicer": predicted,
         "predicted_slicer_reduction": None if predicted is None else predicted["reduction"],
+        "print_frame": frame.to_dict(),
         "print_rotation": {
             "orient": result.settings.orient,
             "matrix": R.round(12).tolist(),
@@ -219,6 +230,71 @@ def build_report(rig, result) -> dict:
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
     }
+    report["support"] = support_headline(report)
+    return report
+
+
+def support_headline(report: dict) -> dict | None:
+    """The one support figure a user compares with their slicer, rest pose -> found pose.
+
+    PrusaSlicer's figures when the report has them (``slice_check``), else the
+    slicer model's prediction (``predicted_slicer``), labelled as such.
+
+    Parameters
+    ----------
+    report : dict
+        A :func:`build_report` report, with ``slice_check`` when a slicer ran.
+
+    Returns
+    -------
+    headline : dict or None
+        ``source`` ("PrusaSlicer" or "predicted"), ``height_mm``,
+        ``before_mm``/``after_mm`` (filament), ``before_g``/``after_g``,
+        ``before_time_s``/``after_time_s`` (printing time the supports add;
+        None without a slicer), ``reduction_percent`` and ``line`` (the
+        summary's text); None for a planar figure.
+    """
+    sliced, predicted = report.get("slice_check"), report.get("predicted_slicer")
+    if sliced:
+        b, a = sliced["before"], sliced["after"]
+        out = {"source": "PrusaSlicer", "height_mm": sliced["height_mm"], "before_mm": b["support_mm"],
+               "after_mm": a["support_mm"], "before_g": b.get("support_g"), "after_g": a.get("support_g"),
+               "before_time_s": b.get("support_time_s"), "after_time_s": a.get("support_time_s")}
+    elif predicted:
+        grams = [mm_to_cm3(predicted[k], FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY for k in ("before_mm", "after_mm")]
+        out = {"source": "predicted", "height_mm": predicted["height_mm"], "before_mm": predicted["before_mm"],
+               "after_mm": predicted["after_mm"], "before_g": grams[0], "after_g": grams[1],
+               "before_time_s": None, "after_time_s": None}
+    else:
+        return None
+    out["reduction_percent"] = reduction(out["before_mm"], out["after_mm"])
+    out["line"] = _headline_text(out)
+    return out
+
+
+def _headline_text(h: dict) -> str:
+    def side(g, mm, t, first):
+        text = f"{g:.1f} g" if g is not None else "? g"
+        text += f" ({mm:,.0f} mm of filament)" if first else f" ({mm:,.0f} mm)"
+        return text + (f", {_minutes(t)}" if t is not None else "")
+
+    red = h["reduction_percent"]
+    change = ("no support before" if red is None else f"{red:.0f} % less" if red >= 0 else f"{-red:.0f} % more")
+    source = ("PrusaSlicer" if h["source"] == "PrusaSlicer"
+              else "predicted for PrusaSlicer, an estimate (--slice-check measures it)")
+    return (f"support {side(h['before_g'], h['before_mm'], h['before_time_s'], True)} -> "
+            f"{side(h['after_g'], h['after_mm'], h['after_time_s'], False)}: {change} "
+            f"({source}; printed {h['height_mm']:.4g} mm tall)")
+
+
+def _minutes(seconds: float) -> str:
+    """``1 h 02 min of printing`` / ``12 min of printing`` / ``40 s of printing``."""
+    seconds = abs(float(seconds))
+    if seconds >= 3600:
+        text = f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    else:
+        text = f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
+    return text + " of printing"
 
 
 def _cpu_count() -> int:

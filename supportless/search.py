@@ -433,7 +433,9 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     callback : callable, optional
         ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
         (normalised terms of the best pose), ``angles``, ``rotation`` (the
-        print rotation) and ``iterations``; return ``False`` to stop.
+        print rotation), ``iterations`` (of the whole search, every phase and
+        the polish; it does not change) and ``phase`` ("pose", "pose and
+        turn" or "polish"); return ``False`` to stop.
     **changes
         Settings to change from ``settings`` (``particles=50``, ``seed=1``, ...).
 
@@ -529,7 +531,7 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
         feasible = no_intersection
 
     def run_phase(turns, initial, particles, offset, optimizer=settings.optimizer, iterations=settings.iterations,
-                  **options):
+                  label=None, **options):
         o, to_angles, to_rotation = variables(turns)
 
         def f(X, bound):
@@ -555,7 +557,8 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
                 term_history[key].append(terms[key])
             if callback is not None:
                 return callback(offset + it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
-                                              "rotation": to_rotation(x), "iterations": total})
+                                              "rotation": to_rotation(x), "iterations": total,
+                                              "phase": label or ("pose and turn" if turns else "pose")})
             return None
 
         lower = np.concatenate([layout.lower, np.full(o, -np.pi)])
@@ -594,7 +597,7 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
             np.eye(rig.dim) if start_rotation is None else np.asarray(start_rotation, np.float64), rig.up)
             if turned else np.zeros(0)])
         polished = run_phase(turned, x0[None], POLISH_SAMPLES * CMA_SHARE, settings.iterations * len(phases),
-                             optimizer="cma", iterations=polishing, sigma=POLISH_SIGMA)
+                             optimizer="cma", iterations=polishing, sigma=POLISH_SIGMA, label="polish")
         stats["polish_evaluations"] = polished.evaluations
         history += list(polished.history if not history else polished.history[1:])
         if swarm is None or polished.value < swarm.value:

@@ -34,6 +34,7 @@ import numpy as np
 from .errors import InputError, SlicerError
 from .gcode import FILAMENT_DIAMETER_MM, mm_to_cm3, parse_filament_used, parse_print_time, read_gcode_tail
 from .io import check_mesh_arrays, read_mesh, write_mesh
+from .printframe import rotation_to_z
 from .profile import DEFAULT_DENSITY, PrinterProfile
 from .report import reduction
 
@@ -147,42 +148,6 @@ def _slicer_version(exe: str) -> str:
 # --------------------------------------------------------------------------- #
 # placement on the bed
 # --------------------------------------------------------------------------- #
-def rotation_to_z(up: Sequence[float]) -> np.ndarray:
-    """The minimal proper rotation taking ``up`` to +Z.
-
-    Parameters
-    ----------
-    up : (3,) float
-        Any non-zero direction.
-
-    Returns
-    -------
-    R : (3, 3) float64
-        Rotation about ``up x z`` (``det R = 1``, never a mirror); for
-        ``up = +Y`` it is +90 degrees about X: y -> z, z -> -y.
-
-    Raises
-    ------
-    ValueError
-        For a zero or non-finite ``up``.
-    """
-    u = np.asarray(up, dtype=np.float64).reshape(3)
-    n = np.linalg.norm(u)
-    if not np.isfinite(n) or n < 1e-12:
-        raise ValueError(f"up direction must be a non-zero 3-vector, got {up!r}")
-    u = u / n
-    c = float(u[2])
-    if c > 1.0 - 1e-12:
-        return np.eye(3)
-    if c < -1.0 + 1e-12:
-        return np.diag([1.0, -1.0, -1.0])  # 180 degrees about X
-    axis = np.cross(u, [0.0, 0.0, 1.0])
-    s = np.linalg.norm(axis)
-    k = axis / s
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
-
-
 def scale_for_height(vertices: np.ndarray, up: Sequence[float], height_mm: float) -> float:
     """The uniform factor making a mesh ``height_mm`` tall along ``up``.
 
@@ -539,7 +504,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
     return SupportSlices(meshes=out, slicer=exe, config=cfg)
 
 
-def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float = 60.0,
+def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float | None = 60.0,
                 timeout: float = DEFAULT_TIMEOUT_S, *, config: Mapping[str, str] | str | None = None,
                 workers: int | None = None, slicer: str | None = None,
                 keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None) -> SliceReport:
@@ -552,8 +517,10 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         ``(V (n, 3) float64, F (f, 3) int64)``.
     up : (3,) float
         The models' printing direction; it becomes +Z on the bed.
-    height_mm : float
-        The original is scaled to this height along ``up``; the posed mesh by the same factor.
+    height_mm : float or None
+        The original is scaled to this height along ``up``; the posed mesh by
+        the same factor. None slices both as they are, in millimetres (print
+        files, see :mod:`supportless.printframe`).
     timeout : float
         Seconds allowed for each of the four PrusaSlicer runs.
     config : dict or str, optional
@@ -587,11 +554,13 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     exe = slicer or find_prusa_slicer()
     if exe is None:
         raise SlicerNotFound()
-    if height_mm <= 0:
+    if height_mm is not None and not height_mm > 0:
         raise ValueError("height_mm must be positive")
     Vo, Fo = _load_mesh(original, "original")
     Vp, Fp = _load_mesh(posed, "posed")
-    s = scale_for_height(Vo, up, height_mm)
+    s = 1.0 if height_mm is None else scale_for_height(Vo, up, height_mm)
+    if height_mm is None:
+        height_mm = float(np.ptp(Vo @ rotation_to_z(up)[2]))
     sliced = slice_support([(Vo, Fo), (Vp, Fp)], up, s, timeout, config=config, workers=workers, slicer=exe,
                            keep_dir=keep_dir, profile=profile, names=("original", "posed"))
     cfg = sliced.config

@@ -18,6 +18,7 @@ from click.testing import CliRunner
 import supportless as sl
 from supportless.cli import main
 from supportless.geometry import place_on_plate
+from supportless.printframe import print_frame
 
 EXE = Path(sys.executable).with_name("supportless")
 
@@ -77,7 +78,7 @@ def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
     assert result.exit_code == 0, (result.output, result.exception)
     V, F = sl.read_mesh(out / "posed.obj")
     assert F.shape == branch_files["F"].shape
-    assert V[:, 1].min() == pytest.approx(0.0, abs=1e-6)  # placed on the build plate
+    assert V[:, 2].min() == pytest.approx(0.0, abs=1e-6)  # placed on the build plate, +Z up
     angles = sl.read_pose(out / "pose.json", branch_files["bones"])
     from supportless.prior import joint_angles
 
@@ -118,7 +119,7 @@ def test_apply_writes_the_posed_mesh(branch_files, tmp_path):
     assert "posed.ply" in result.stdout
     V, F = sl.read_mesh(tmp_path / "posed.ply")
     rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
-    expected = place_on_plate(rig.pose(angles), rig.up)
+    expected = print_frame(rig.vertices, rig.up).place(rig.pose(angles))  # +Z up, 60 mm tall at rest, mm
     np.testing.assert_array_equal(F, rig.faces)
     np.testing.assert_allclose(V, expected, atol=1e-5)
 
@@ -149,9 +150,12 @@ def test_demo_3d_writes_every_file(tmp_path, prusa_slicer):
     assert report["dimension"] == 3 and report["after"]["intersecting_face_pairs"] == 0
     assert report["settings"]["particles"] == 8
     assert report["slice_check"]["before"]["support_mm"] > 0
-    assert "PrusaSlicer support filament" in result.stdout
+    assert "(PrusaSlicer; printed 60 mm tall)" in " ".join(result.stdout.split())
+    assert "60 particles" not in result.stdout and "8 particles x 3 iterations" in result.stdout
     V, _ = sl.read_mesh(out / "tpose-posed.stl")
-    assert V[:, 1].min() == pytest.approx(0.0, abs=1e-6)
+    assert V[:, 2].min() == pytest.approx(0.0, abs=1e-6)
+    R, _ = sl.read_mesh(out / "tpose-rest.stl")
+    assert np.ptp(R[:, 2]) == pytest.approx(60.0, abs=1e-3)
 
 
 def test_slice_check_without_the_slicer_keeps_every_output(branch_files, tmp_path):
@@ -258,7 +262,8 @@ def test_precomputed_tets_and_weights(branch_files, branch_rig, tmp_path):
     assert result.exit_code == 0, (result.output, result.exception)
     V, _ = sl.read_mesh(tmp_path / "posed.stl")
     surface = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])  # same file, same vertex order
-    np.testing.assert_allclose(V, place_on_plate(surface.vertices, surface.up), atol=1e-4)  # nothing follows bone 2
+    frame = print_frame(surface.vertices, surface.up)
+    np.testing.assert_allclose(V, frame.place(surface.vertices), atol=1e-4)  # nothing follows bone 2
 
 
 # ----------------------------------------------------------------------- errors
@@ -323,16 +328,18 @@ def test_print_rotation_round_trips_through_apply(branch_files, tmp_path):
                  "--pose", tmp_path / "pose.json", "--report", tmp_path / "report.json")
     assert result.exit_code == 0, result.output
     rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
-    R = sl.io.read_print_rotation(tmp_path / "pose.json", 3)
+    R = sl.posefile.read_print_rotation(tmp_path / "pose.json", 3)
     assert not np.allclose(R, np.eye(3))  # the branch is turned to print
     report = json.loads((tmp_path / "report.json").read_text())
     np.testing.assert_allclose(report["print_rotation"]["matrix"], R, atol=1e-12)
     printed, _ = sl.read_mesh(tmp_path / "printed.obj")
     standing, _ = sl.read_mesh(tmp_path / "standing.obj")
     angles = sl.read_pose(tmp_path / "pose.json", rig.bones)
-    np.testing.assert_allclose(standing, place_on_plate(rig.pose(angles), rig.up), atol=1e-5)
-    np.testing.assert_allclose(printed, sl.geometry.print_pose(standing, R, rig.up), atol=1e-4)
-    assert printed[:, 1].min() == pytest.approx(0.0, abs=1e-5)
+    frame = print_frame(rig.vertices, rig.up)  # the files: +Z up, mm, the rest pose 60 mm tall
+    upright = place_on_plate(rig.pose(angles), rig.up)
+    np.testing.assert_allclose(standing, frame.place(upright), atol=1e-5)
+    np.testing.assert_allclose(printed, frame.place(sl.geometry.print_pose(upright, R, rig.up)), atol=1e-4)
+    assert printed[:, 2].min() == pytest.approx(0.0, abs=1e-5)
     again = run("apply", *common, "--pose", tmp_path / "pose.json", "-o", tmp_path / "a-printed.obj",
                 "--upright-out", tmp_path / "a-standing.obj")
     assert again.exit_code == 0, again.output
@@ -347,7 +354,7 @@ def test_orient_keep_writes_the_pose_standing(branch_files, tmp_path):
                  "--pose", tmp_path / "pose.json")
     assert result.exit_code == 0, result.output
     np.testing.assert_array_equal(sl.read_mesh(tmp_path / "printed.obj")[0], sl.read_mesh(tmp_path / "standing.obj")[0])
-    np.testing.assert_array_equal(sl.io.read_print_rotation(tmp_path / "pose.json", 3), np.eye(3))
+    np.testing.assert_array_equal(sl.posefile.read_print_rotation(tmp_path / "pose.json", 3), np.eye(3))
 
 
 def test_a_bad_print_rotation_is_one_line(branch_files, tmp_path):
@@ -419,12 +426,12 @@ def test_impossible_output_locations_are_refused_before_the_search(branch_files,
 
 def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(branch_files, tmp_path,
                                                                                monkeypatch):
-    import supportless.io as sio
+    import supportless.posefile as posefile
 
     def full_disk(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(sio, "write_pose", full_disk)
+    monkeypatch.setattr(posefile, "write_pose", full_disk)
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
                  "--iterations", 1, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
                  "--report", tmp_path / "report.json")

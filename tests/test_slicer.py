@@ -372,7 +372,8 @@ def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     from supportless.cli import main
 
     rest, posed = _demo_meshes(tmp_path)
-    out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--up", "y", "--json"])
+    out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--up", "y", "--posed-as", "original",
+                                     "--json"])
     assert out.exit_code == 0, out.output
     data = json.loads(out.output)
     assert data["before"]["support_mm"] > 0
@@ -380,7 +381,7 @@ def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     assert data["reduction_percent"] > 0
     assert data["before"]["support_g"] == pytest.approx(data["before"]["support_cm3"] * 1.24)
     assert data["before"]["support_time_s"] > data["after"]["support_time_s"] >= 0
-    text = CliRunner().invoke(main, ["slice-check", str(rest), str(posed)])
+    text = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--posed-as", "original"])
     assert text.exit_code == 0 and "reduction" in text.output
     assert " g, " in text.output and "printing time of the supports:" in text.output and "less" in text.output
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from supportless import io as sio
+from supportless import posefile
 from supportless.errors import SupportlessError
 from supportless.geometry import print_pose
 from supportless.kinematics import euler_to_matrix
@@ -133,7 +134,7 @@ def test_bad_pose_files_raise_and_keep_the_pose(state, branch_rig, tmp_path):
     state.set_bone_angles(0, [0, 0, 5.0])
     before = state.get_angles()
     other = tmp_path / "other.json"
-    sio.write_pose(other, np.zeros((5, 3)), np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]]))
+    posefile.write_pose(other, np.zeros((5, 3)), np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5]]))
     with pytest.raises(SupportlessError, match="skeleton"):
         state.load_pose(other)
     (tmp_path / "junk.json").write_text("{not json")
@@ -154,9 +155,10 @@ def test_export_mesh_file_and_bytes_on_the_plate(state, branch_rig, tmp_path):
         p = state.export_mesh(tmp_path / f"posed.{ext}")
         m = trimesh.load(p, force="mesh")
         assert len(m.faces) == len(branch_rig.faces)
-        assert float((m.vertices @ branch_rig.up).min()) == pytest.approx(0.0, abs=1e-5)
-    assert np.allclose(state.posed_on_plate(), trimesh.load(tmp_path / "posed.obj", force="mesh", process=False)
-                       .vertices, atol=1e-5)
+        assert float(m.vertices[:, 2].min()) == pytest.approx(0.0, abs=1e-5)  # a print file: +Z up, on the plate
+    assert np.ptp(trimesh.load(tmp_path / "posed.obj", force="mesh").vertices[:, 2]) > 20  # millimetres
+    assert np.allclose(state.print_frame.place(state.posed_on_plate()),
+                       trimesh.load(tmp_path / "posed.obj", force="mesh", process=False).vertices, atol=1e-5)
     assert state.mesh_bytes("stl") == (tmp_path / "posed.stl").read_bytes()
     with pytest.raises(SupportlessError, match="unknown output format"):
         state.export_mesh(tmp_path / "posed.xyz")
@@ -411,9 +413,9 @@ def test_print_frame_is_the_turned_pose_on_the_plate(state, branch_rig, tmp_path
         state.frame_transform("sideways")
     # the exported mesh is the one to slice: as printed; standing on request
     printed = trimesh.load(state.export_mesh("printed.obj"), force="mesh", process=False)
-    assert np.allclose(printed.vertices, expected, atol=1e-5)
+    assert np.allclose(printed.vertices, state.print_frame.place(expected), atol=1e-5)
     standing = trimesh.load(state.export_mesh("standing.obj", frame="standing"), force="mesh", process=False)
-    assert np.allclose(standing.vertices, state.posed_on_plate(), atol=1e-5)
+    assert np.allclose(standing.vertices, state.print_frame.place(state.posed_on_plate()), atol=1e-5)
     assert not np.allclose(standing.vertices, printed.vertices, atol=1e-3)
 
 
@@ -427,7 +429,7 @@ def test_pose_files_keep_the_print_rotation(state, branch_rig, tmp_path):
     data = json.loads(path.read_text())
     assert np.allclose(data["print_rotation"], R)
     assert data["objective"] == pytest.approx(float(state.objective(target, R)))
-    assert np.allclose(sio.read_print_rotation(path, 3), R)
+    assert np.allclose(posefile.read_print_rotation(path, 3), R)
     payload = state.pose_bytes()
     state.reset()
     assert np.array_equal(state.get_rotation(), np.eye(3))
@@ -438,7 +440,7 @@ def test_pose_files_keep_the_print_rotation(state, branch_rig, tmp_path):
     assert np.allclose(state.get_rotation(), R, atol=1e-15)
     # a pose file without a print rotation prints as it stands
     plain = tmp_path / "plain.json"
-    sio.write_pose(plain, target, rig.bones, rig.joints)
+    posefile.write_pose(plain, target, rig.bones, rig.joints)
     state.load_pose(plain)
     assert np.array_equal(state.get_rotation(), np.eye(3))
     # a broken print rotation is refused, the state stays

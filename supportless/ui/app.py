@@ -81,9 +81,9 @@ class App:
     """
 
     def __init__(self, rig, host: str = "127.0.0.1", port: int | None = None, *, verbose: bool = True,
-                 workdir=None, settings: SearchSettings | None = None):
+                 workdir=None, settings: SearchSettings | None = None, frame=None):
         self.rig = rig
-        self.state = EditorState(rig, settings, workdir)
+        self.state = EditorState(rig, settings, workdir, frame)
         self.status = "ready"
         self.measures: dict = {}
         self.shown_vertices: np.ndarray | None = None
@@ -418,7 +418,7 @@ class App:
 
 
 def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser: bool = False,
-            block: bool = True, verbose: bool = True, settings: SearchSettings | None = None) -> App:
+            block: bool = True, verbose: bool = True, settings: SearchSettings | None = None, frame=None) -> App:
     """Serve the viewer of ``rig``.
 
     Parameters
@@ -437,13 +437,15 @@ def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser:
         Let viser print its banner.
     settings : SearchSettings, optional
         Search settings the panel starts with.
+    frame : supportless.printframe.PrintFrame, optional
+        How exported meshes are printed (default: the rest pose 60 mm tall).
 
     Returns
     -------
     app : App
         ``app.url``, ``app.port``, ``app.stop()``.
     """
-    app = App(rig, host=host, port=port, verbose=verbose, settings=settings)
+    app = App(rig, host=host, port=port, verbose=verbose, settings=settings, frame=frame)
     logger.info("supportless viewer at %s", app.url)
     if open_browser:
         import webbrowser

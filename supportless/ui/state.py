@@ -47,6 +47,7 @@ from typing import Callable
 import numpy as np
 
 from .. import io as sio
+from .. import posefile
 from ..energies.exact import intersecting_faces
 from ..energies.overhang import risky_faces
 from ..geometry import place_on_plate, print_pose, print_transform
@@ -56,6 +57,7 @@ from ..orientation import print_direction, rotation_axis_angle
 from ..report import pose_measures, reduction
 from ..search import PoseResult, optimize
 from ..settings import SearchSettings
+from ..printframe import PrintFrame, rig_print_frame
 from .history import PoseHistory
 
 __all__ = ["EditorState", "FRAMES", "REDUCED_MEASURES"]
@@ -130,8 +132,10 @@ class EditorState:
         The last finished search.
     """
 
-    def __init__(self, rig, settings: SearchSettings | None = None, workdir=None):
+    def __init__(self, rig, settings: SearchSettings | None = None, workdir=None, frame: PrintFrame | None = None):
         self.rig = rig
+        #: how exported meshes are printed (+Z up, mm, on the plate; default: the rest pose 60 mm tall)
+        self.print_frame = rig_print_frame(rig) if frame is None else frame
         self.workdir = Path(workdir) if workdir is not None else Path.cwd()
         self.history = PoseHistory()
         self._lock = threading.RLock()
@@ -340,8 +344,9 @@ class EditorState:
         """
         p = self.resolve_path(path)
         angles, R = self.get_pose()
-        extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict()}
-        sio.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R)
+        extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict(),
+                 "print_frame": self.print_frame.to_dict()}
+        posefile.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R)
         return p
 
     def load_pose(self, path) -> Path:
@@ -361,8 +366,8 @@ class EditorState:
             skeleton, or a ``print_rotation`` that is not a rotation.
         """
         p = self.resolve_path(path)
-        angles = sio.read_pose(p, self.rig.bones)
-        self.set_angles(angles, rotation=sio.read_print_rotation(p, self.rig.dim))
+        angles = posefile.read_pose(p, self.rig.bones)
+        self.set_angles(angles, rotation=posefile.read_print_rotation(p, self.rig.dim))
         return p
 
     def load_pose_bytes(self, name: str, content: bytes) -> None:
@@ -375,8 +380,9 @@ class EditorState:
     def pose_bytes(self) -> bytes:
         """The current pose and print rotation as a pose JSON file's bytes."""
         angles, R = self.get_pose()
-        return _file_bytes("pose.json", lambda p: sio.write_pose(p, angles, self.rig.bones, self.rig.joints,
-                                                                 rotation=R))
+        return _file_bytes("pose.json", lambda p: posefile.write_pose(p, angles, self.rig.bones, self.rig.joints,
+                                                                 rotation=R,
+                                                                 extra={"print_frame": self.print_frame.to_dict()}))
 
     def posed_on_plate(self) -> np.ndarray:
         """The current posed surface standing, its lowest point on the plate.
@@ -438,7 +444,8 @@ class EditorState:
         path : str or os.PathLike
         frame : {"print", "standing"}
             As printed (default, :meth:`printed_on_plate`: what to slice) or
-            standing (:meth:`posed_on_plate`); on the plate either way.
+            standing (:meth:`posed_on_plate`); on the plate either way, in
+            the print frame (:attr:`print_frame`: +Z up, millimetres).
 
         Returns
         -------
@@ -446,12 +453,12 @@ class EditorState:
             Where it was written.
         """
         p = self.resolve_path(path)
-        sio.write_mesh(p, self._frame_vertices(frame), self.rig.faces)
+        sio.write_mesh(p, self.print_frame.place(self._frame_vertices(frame)), self.rig.faces)
         return p
 
     def mesh_bytes(self, fmt: str, frame: str = "print") -> bytes:
         """The posed mesh (on the plate, by default as printed) as a file's bytes, ``fmt`` in stl/3mf/obj/ply."""
-        V = self._frame_vertices(frame)
+        V = self.print_frame.place(self._frame_vertices(frame))
         return _file_bytes(f"mesh.{fmt}", lambda p: sio.write_mesh(p, V, self.rig.faces))
 
     # ---------------------------------------------------- settings, measures

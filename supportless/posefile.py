@@ -1,0 +1,179 @@
+"""Pose files: a pose (Euler angles per bone), its print rotation and print frame, as JSON.
+
+``optimize --pose`` writes one, ``apply`` and the browser app read it back. The
+skeleton is stored with the angles, so a pose is never applied to another
+skeleton; every reader raises :class:`~supportless.errors.InputError` with one
+clear line on bad input.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError
+from .io import _one_line, write_json
+
+__all__ = ["POSE_FORMAT", "read_pose", "read_pose_print_frame", "read_print_rotation", "write_pose"]
+
+POSE_FORMAT = "supportless-pose"
+
+
+def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, joints: np.ndarray | None = None,
+               extra: dict | None = None, rotation: np.ndarray | None = None) -> None:
+    """Write a pose (Euler angles per bone) as JSON, atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    angles : (m, 3) float64
+        Radians, XYZ Euler angles per bone (see :mod:`supportless.kinematics`).
+    bones : (m, 2) int64
+        The skeleton the pose belongs to (0-based), stored so a pose is never
+        applied to another skeleton.
+    joints : (j, d) float64, optional
+        Stored for reference.
+    extra : dict, optional
+        More fields (e.g. the objective value).
+    rotation : (d, d) float64, optional
+        The print rotation R (the posed model is printed turned by R), stored
+        as ``print_rotation``; read back with :func:`read_print_rotation`.
+    """
+    angles = np.asarray(angles, np.float64)
+    data = {
+        "format": POSE_FORMAT,
+        "version": 1,
+        "euler": "XYZ, radians, about each bone's root joint, relative to the parent bone",
+        "bones": np.asarray(bones).tolist(),
+        "angles": angles.tolist(),
+        "angles_deg": np.degrees(angles).round(6).tolist(),
+    }
+    if joints is not None:
+        data["joints"] = np.asarray(joints).tolist()
+    if rotation is not None:
+        data["print_rotation"] = np.asarray(rotation, np.float64).tolist()
+    if extra:
+        data.update(extra)
+    write_json(path, data)
+
+
+def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.ndarray:
+    """Read a pose written by :func:`write_pose`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    bones : (m, 2) int64, optional
+        The skeleton the pose must belong to.
+
+    Returns
+    -------
+    angles : (m, 3) float64
+        Radians.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(path, "no such file")
+    try:
+        data = json.loads(path.read_text())
+        angles = np.asarray(data["angles"], dtype=np.float64)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise InputError(path, f"not a pose file (JSON with 'angles' and 'bones'): {_one_line(exc)}") from None
+    if angles.ndim != 2 or angles.shape[1] != 3:
+        raise InputError(path, f"'angles' must be a list of [x, y, z] per bone, got shape {angles.shape}")
+    bad = np.flatnonzero(~np.isfinite(angles).all(axis=1))
+    if len(bad):
+        raise InputError(path, f"the angles of bone {bad[0] + 1} are not finite numbers ({len(bad)} such bones)")
+    if bones is not None:
+        bones = np.asarray(bones)
+        if len(angles) != len(bones):
+            raise InputError(path, f"pose is for a skeleton with {len(angles)} bones, not this one with "
+                                   f"{len(bones)}; use the skeleton the pose was made with")
+        try:
+            stored = np.asarray(data.get("bones", []), dtype=np.int64)
+        except (TypeError, ValueError):
+            raise InputError(path, "'bones' must be a list of [i, j] joint pairs") from None
+        if stored.size and (stored.shape != bones.shape or np.any(stored != bones)):
+            k = next((i for i in range(min(len(stored), len(bones))) if stored.ndim != 2
+                      or not np.array_equal(stored[i], bones[i])), 0)
+            have = stored[k].tolist() if stored.ndim == 2 and k < len(stored) else stored.tolist()
+            raise InputError(path, f"pose is for another skeleton with as many bones: its bone {k + 1} joins "
+                                   f"joints {have}, this skeleton's {bones[k].tolist()} (0-based); use the "
+                                   f"skeleton the pose was made with")
+    return angles
+
+
+def read_print_rotation(path: str | os.PathLike, dim: int = 3) -> np.ndarray:
+    """The print rotation stored in a pose file (the identity when there is none).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A pose file of :func:`write_pose`.
+    dim : int
+        The rig's dimension (2 or 3).
+
+    Returns
+    -------
+    R : (dim, dim) float64
+
+    Raises
+    ------
+    InputError
+        When ``print_rotation`` is not a ``dim`` x ``dim`` rotation matrix.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"not a pose file: {_one_line(exc)}") from None
+    if "print_rotation" not in data:
+        return np.eye(dim)
+    try:
+        R = np.asarray(data["print_rotation"], np.float64)
+    except (ValueError, TypeError):
+        R = np.zeros(0)
+    if R.shape != (dim, dim) or not np.allclose(R @ R.T, np.eye(dim), atol=1e-6) or np.linalg.det(R) < 0:
+        raise InputError(path, f"'print_rotation' must be a {dim}x{dim} rotation matrix (rows of numbers); "
+                               "remove it to print the pose as it stands")
+    return R
+
+
+def read_pose_print_frame(path: str | os.PathLike) -> dict | None:
+    """The print frame a pose file was written with (``print_frame``), or None when it has none.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A pose file of :func:`write_pose`.
+
+    Returns
+    -------
+    frame : dict or None
+        ``height_mm`` (float, positive) and ``how`` ("default", "height" or
+        "units"), as :meth:`supportless.printframe.PrintFrame.to_dict` wrote them.
+
+    Raises
+    ------
+    InputError
+        When ``print_frame`` is there but not a frame.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"not a pose file: {_one_line(exc)}") from None
+    frame = data.get("print_frame") if isinstance(data, dict) else None
+    if frame is None:
+        return None
+    try:
+        height, how = float(frame["height_mm"]), str(frame["how"])
+    except (KeyError, TypeError, ValueError):
+        height, how = float("nan"), ""
+    if not (np.isfinite(height) and height > 0) or how not in ("default", "height", "units"):
+        raise InputError(path, "'print_frame' must hold a positive 'height_mm' and 'how' (default, height or "
+                               "units); remove it to print at the default size")
+    return {"height_mm": height, "how": how}
