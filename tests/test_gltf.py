@@ -845,6 +845,11 @@ def test_cli_optimize_and_apply_a_glb(tmp_path):
         assert (tmp_path / name).is_file(), name
     pose = json.loads((tmp_path / "p.json").read_text())
     assert pose["bone_names"] == ["J0", "J1", "J2"]
+    # the STL is a print file: +Z up, on the plate, at the default printed size (the rest pose 60 mm tall)
+    assert pose["print_frame"]["height_mm"] == 60.0
+    printed = sl.read_mesh(tmp_path / "out.stl")[0]
+    assert printed[:, 2].min() == pytest.approx(0.0, abs=1e-4)
+    assert 20.0 < np.ptp(printed, axis=0).max() < 300.0
     again = run(main, [str(a) for a in ["apply", *common, "--pose", tmp_path / "p.json", "-o",
                                         tmp_path / "again.stl"]])
     assert again.exit_code == 0, (again.output, again.exception)
