@@ -164,7 +164,7 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     stl = folder / f"{spec.name}.stl"
     write_mesh(stl, frame.place(result.print_vertices), rig.faces)
     write_pose(folder / f"{spec.name}.pose.json", result.angles, rig.bones, rig.joints, rotation=result.rotation,
-               extra={"objective": result.value, "print_frame": frame.to_dict()})
+               extra={"objective": result.value, "print_frame": frame.to_dict()}, tree=rig.tree)
     write_pictures(folder, rig, result, report)
     predicted = report.get("predicted_slicer") or {}
     row = {"model": spec.name, "status": "ok", "reason": "",

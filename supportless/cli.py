@@ -140,7 +140,7 @@ def _summary_table(report: dict, verbose: bool = False):
                   f"{100 * a['stability_margin']:.1f} %", "stands" if a["stands"] else "FALLS OVER")
     table.add_row("largest joint rotation", "0°", f"{report['largest_rotation_deg']:.0f}°", "")
     rot = report.get("print_rotation")
-    if rot and rot["angle_deg"]:
+    if rot and rot["angle_deg"] >= 0.5:  # a turn that shows in whole degrees
         up = report["up"]
         table.add_row("printed turned by", "0°", f"{rot['angle_deg']:.0f}°",
                       f"model {[round(x, 2) for x in rot['printing_direction_in_model_frame']]} up, was {up}")
@@ -172,7 +172,7 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, fra
         extra = {"objective": result.value, "print_frame": frame.to_dict()}
         if rig.labels is not None:
             extra["bone_names"] = rig.bone_names()
-        write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation)
+        write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation, tree=rig.tree)
         return [("pose", pose)]
 
     def report_file():
@@ -399,7 +399,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
         height_mm = None if keep_units else saved["height_mm"]
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
                        keep_units=keep_units)
-    angles = read_pose(pose, rig.bones)
+    angles = read_pose(pose, rig.bones, tree=rig.tree, root_bone=rig.root_bone)
     R = read_print_rotation(pose, rig.dim)
     _say_frame(rig, frame)
     standing = place_on_plate(rig.pose(angles), rig.up)

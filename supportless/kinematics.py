@@ -82,6 +82,23 @@ def topological_order(parents: np.ndarray) -> np.ndarray:
     return np.argsort(depth, kind="stable")
 
 
+def bone_depths(parents: np.ndarray) -> np.ndarray:
+    """How many bones lie above each bone in its tree (0 for a root).
+
+    Parameters
+    ----------
+    parents : (m,) int64
+
+    Returns
+    -------
+    depth : (m,) int64
+    """
+    depth = np.zeros(len(parents), np.int64)
+    for b in topological_order(parents):
+        depth[b] = 0 if parents[b] < 0 else depth[parents[b]] + 1
+    return depth
+
+
 def descendants(parents: np.ndarray, bone: int) -> np.ndarray:
     """The bone and every bone below it in the hierarchy.
 
@@ -104,12 +121,17 @@ def descendants(parents: np.ndarray, bone: int) -> np.ndarray:
 
 
 def reroot(bones: np.ndarray, parents: np.ndarray, anchor: int) -> tuple[np.ndarray, np.ndarray]:
-    """Re-root a skeleton's kinematic tree at one bone.
+    """The tree of pose files of version 1: the path from ``anchor`` to its root reversed, nothing else.
 
     The bones on the path from ``anchor`` up to its root have their parent
     pointers reversed: each now hangs from its former child and turns about the
     joint they share (its tip). Every other bone keeps its parent and turns
     about its root joint. With ``anchor`` a root bone nothing changes.
+
+    This tears a skeleton whose root joint has several bones (they stay roots,
+    about a joint that now moves): :func:`kinematic_tree` is the rig's tree. It
+    is kept to recognise pose files written with it
+    (:func:`supportless.posefile.read_pose`).
 
     Parameters
     ----------
@@ -137,6 +159,57 @@ def reroot(bones: np.ndarray, parents: np.ndarray, anchor: int) -> tuple[np.ndar
             pivots[b] = bones[b, 1]  # shared with the former child
         child, b = b, up
     return new, pivots
+
+
+def kinematic_tree(bones: np.ndarray, roots=()) -> tuple[np.ndarray, np.ndarray]:
+    """One kinematic tree per connected skeleton, hanging from the given root bones.
+
+    Two bones are connected when they share a joint. From a root bone the tree
+    grows breadth first: the first bone of the tree to reach a joint carries it,
+    and every other bone at that joint hangs from it and turns about that joint.
+    So bones that share a joint always keep it in one place (siblings at a
+    skeleton's root joint included), and a chain rooted at its end (a hand on
+    the plate) carries the rest of the body. The first of ``roots`` in each
+    connected skeleton is its root; a skeleton with none is rooted at its first
+    root bone of :func:`bone_parents` (its old root).
+
+    Parameters
+    ----------
+    bones : (m, 2) int64
+        ``[root joint, tip joint]`` per bone.
+    roots : sequence of int
+        Candidate root bones in order of preference; later ones in an
+        already-rooted skeleton hang from its tree.
+
+    Returns
+    -------
+    parents : (m,) int64
+        The parent of each bone in the tree, -1 for the root of each skeleton.
+    pivots : (m,) int64
+        The joint each bone turns about: the joint it shares with its parent
+        (a root's is its root joint ``bones[b, 0]``).
+    """
+    bones = np.asarray(bones, np.int64)
+    m = len(bones)
+    parents = np.full(m, -1, np.int64)
+    pivots = bones[:, 0].copy() if m else np.zeros(0, np.int64)
+    at_joint: dict[int, list[int]] = {}
+    for b, (r, t) in enumerate(bones):
+        at_joint.setdefault(int(r), []).append(b)
+        at_joint.setdefault(int(t), []).append(b)
+    seen = np.zeros(m, bool)
+    for root in [int(r) for r in roots] + list(topological_order(bone_parents(bones))):
+        if seen[root]:
+            continue
+        seen[root] = True
+        queue = [root]
+        for b in queue:
+            for joint in (pivots[b], *(j for j in bones[b] if j != pivots[b])):
+                for c in at_joint[int(joint)]:
+                    if not seen[c]:
+                        seen[c], parents[c], pivots[c] = True, b, joint
+                        queue.append(c)
+    return parents, pivots
 
 
 def connecting_bones(bones: np.ndarray, terminals: np.ndarray) -> np.ndarray:
@@ -275,11 +348,12 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
     angles : (P, m, 3) or (m, 3) float64
         Relative XYZ Euler angles per bone, radians (2D uses ``[..., 2]`` only).
     parents, order : (m,) int64, optional
-        From :func:`bone_parents` and :func:`topological_order` (or a tree
-        re-rooted by :func:`reroot`); computed from ``bones`` when not given.
+        The kinematic tree (:func:`kinematic_tree`) and :func:`topological_order`
+        of it; without ``parents``, ``kinematic_tree(bones)`` (each skeleton
+        rooted at its first root bone).
     pivots : (m,) int64, optional
-        The joint each bone turns about, shared with its parent (default: its
-        root joint ``bones[:, 0]``; see :func:`reroot`).
+        The joint each bone turns about, shared with its parent (default: the
+        tree's, or each bone's root joint ``bones[:, 0]`` when ``parents`` is given).
 
     Returns
     -------
@@ -297,7 +371,8 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
         raise ValueError(f"angles have {m} bones, the skeleton has {len(bones)}")
     d = joints.shape[1]
     if parents is None:
-        parents = bone_parents(bones)
+        parents, tree_pivots = kinematic_tree(bones)
+        pivots = tree_pivots if pivots is None else pivots
     if order is None:
         order = topological_order(parents)
     dQ = euler_to_matrix(angles) if d == 3 else planar_rotation(angles[..., 2])

@@ -430,7 +430,7 @@ def write_front(rig: Rig, front: Front, output: str | os.PathLike,
         r = p.result
         glb = Path(mesh).suffix.lower() in (".glb", ".gltf") and rig.dim == 3
         write_mesh(mesh, frame.to_gltf(r.print_vertices) if glb else frame.place(r.print_vertices), rig.faces)
-        write_pose(pose, r.angles, rig.bones, rig.joints, rotation=r.rotation,
+        write_pose(pose, r.angles, rig.bones, rig.joints, rotation=r.rotation, tree=rig.tree,
                    extra={"objective": r.value, "support": p.support, "distortion": p.distortion,
                           "print_frame": frame.to_dict()})
         entries.append(p.to_dict() | {"mesh": str(mesh), "pose": str(pose)})

@@ -16,6 +16,7 @@ import numpy as np
 
 from .errors import InputError
 from .io import _one_line, write_json
+from .kinematics import bone_parents, reroot
 
 __all__ = ["POSE_FORMAT", "read_pose", "read_pose_print_frame", "read_print_rotation", "write_pose"]
 
@@ -23,7 +24,8 @@ POSE_FORMAT = "supportless-pose"
 
 
 def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, joints: np.ndarray | None = None,
-               extra: dict | None = None, rotation: np.ndarray | None = None) -> None:
+               extra: dict | None = None, rotation: np.ndarray | None = None,
+               tree: tuple[np.ndarray, np.ndarray] | None = None) -> None:
     """Write a pose (Euler angles per bone) as JSON, atomically.
 
     Parameters
@@ -41,16 +43,25 @@ def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, j
     rotation : (d, d) float64, optional
         The print rotation R (the posed model is printed turned by R), stored
         as ``print_rotation``; read back with :func:`read_print_rotation`.
+    tree : ((m,) int64, (m,) int64), optional
+        The kinematic tree the angles are relative to, ``(parents, pivots)``
+        (:attr:`supportless.rig.Rig.parents` and ``pivots``), stored as
+        ``tree`` (version 2) so the angles are never read against another tree.
     """
     angles = np.asarray(angles, np.float64)
     data = {
         "format": POSE_FORMAT,
-        "version": 1,
-        "euler": "XYZ, radians, about each bone's root joint, relative to the parent bone",
+        "version": 1 if tree is None else 2,
+        "euler": "XYZ, radians, about each bone's root joint, relative to the parent bone" if tree is None else
+                 "XYZ, radians, about each bone's pivot joint (tree.pivots, 0-based), relative to its parent bone "
+                 "(tree.parents, 0-based, -1 for a root)",
         "bones": np.asarray(bones).tolist(),
         "angles": angles.tolist(),
         "angles_deg": np.degrees(angles).round(6).tolist(),
     }
+    if tree is not None:
+        data["tree"] = {"parents": np.asarray(tree[0], np.int64).tolist(),
+                        "pivots": np.asarray(tree[1], np.int64).tolist()}
     if joints is not None:
         data["joints"] = np.asarray(joints).tolist()
     if rotation is not None:
@@ -60,7 +71,8 @@ def write_pose(path: str | os.PathLike, angles: np.ndarray, bones: np.ndarray, j
     write_json(path, data)
 
 
-def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.ndarray:
+def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None,
+              tree: tuple[np.ndarray, np.ndarray] | None = None, root_bone: int | None = None) -> np.ndarray:
     """Read a pose written by :func:`write_pose`.
 
     Parameters
@@ -68,6 +80,13 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.nd
     path : str or os.PathLike
     bones : (m, 2) int64, optional
         The skeleton the pose must belong to.
+    tree : ((m,) int64, (m,) int64), optional
+        The rig's kinematic tree ``(parents, pivots)`` (:attr:`supportless.rig.Rig.tree`):
+        a file that records another tree is refused, and so is a file without
+        one (version 1) unless the tree such files were written with
+        (:func:`~supportless.kinematics.reroot` at ``root_bone``) is the same.
+    root_bone : int, optional
+        :attr:`supportless.rig.Rig.root_bone`, with ``tree``.
 
     Returns
     -------
@@ -103,6 +122,9 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None) -> np.nd
             raise InputError(path, f"pose is for another skeleton with as many bones: its bone {k + 1} joins "
                                    f"joints {have}, this skeleton's {bones[k].tolist()} (0-based); use the "
                                    f"skeleton the pose was made with")
+    if tree is not None:
+        tree_v1 = None if root_bone is None or bones is None else reroot(bones, bone_parents(bones), root_bone)
+        _check_tree(path, data, tree, tree_v1)
     return angles
 
 
@@ -177,3 +199,25 @@ def read_pose_print_frame(path: str | os.PathLike) -> dict | None:
         raise InputError(path, "'print_frame' must hold a positive 'height_mm' and 'how' (default, height or "
                                "units); remove it to print at the default size")
     return {"height_mm": height, "how": how}
+
+
+def _same_tree(a, b) -> bool:
+    return all(np.array_equal(np.asarray(x, np.int64), np.asarray(y, np.int64)) for x, y in zip(a, b))
+
+
+def _check_tree(path: Path, data: dict, tree, tree_v1) -> None:
+    """InputError unless the pose's angles are relative to ``tree`` (see :func:`read_pose`)."""
+    stored = data.get("tree")
+    if stored is None:
+        if tree_v1 is not None and _same_tree(tree_v1, tree):
+            return
+        raise InputError(path, "this pose was written before pose files recorded their kinematic tree, and this "
+                               "skeleton's tree has changed since (bones that share a joint now keep it together): "
+                               "its angles would give another pose; run optimize again for a pose of this rig")
+    try:
+        parents, pivots = (np.asarray(stored[k], np.int64) for k in ("parents", "pivots"))
+    except (KeyError, TypeError, ValueError):
+        raise InputError(path, "'tree' must hold 'parents' and 'pivots', one integer per bone") from None
+    if parents.shape != np.shape(tree[0]) or not _same_tree((parents, pivots), tree):
+        raise InputError(path, "the pose's angles are relative to another kinematic tree of this skeleton (another "
+                               "bone rests on the plate, or another --up): run optimize again for this rig")

@@ -146,33 +146,33 @@ class Rig:
         return kin.connecting_bones(self.bones, self.contact_bones)
 
     @cached_property
+    def anchor_order(self) -> np.ndarray:
+        """(k,) int64: the anchored bones, nearest the skeleton's root (in the TGF's tree) first."""
+        anchored = np.flatnonzero(self.anchored_bones)
+        return anchored[np.argsort(kin.bone_depths(kin.bone_parents(self.bones))[anchored], kind="stable")]
+
+    @property
     def root_bone(self) -> int:
         """The bone the kinematic tree hangs from: the anchored bone nearest the skeleton's root."""
-        parents = kin.bone_parents(self.bones)
-        depth = np.zeros(self.bone_count, np.int64)
-        for b in kin.topological_order(parents):
-            depth[b] = 0 if parents[b] < 0 else depth[parents[b]] + 1
-        anchored = np.flatnonzero(self.anchored_bones)
-        return int(anchored[np.argmin(depth[anchored])])
+        return int(self.anchor_order[0])
 
     @cached_property
-    def _tree(self) -> tuple[np.ndarray, np.ndarray]:
-        return kin.reroot(self.bones, kin.bone_parents(self.bones), self.root_bone)
+    def tree(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(parents, pivots)``: :func:`~supportless.kinematics.kinematic_tree` from the anchored bones.
+
+        The anchored bones never move; bones sharing a joint keep it together. Pose angles are relative to it.
+        """
+        return kin.kinematic_tree(self.bones, self.anchor_order)
 
     @property
     def parents(self) -> np.ndarray:
-        """(m,) int64: parent bone of each bone in the kinematic tree, -1 for roots.
-
-        The skeleton's tree re-rooted at :attr:`root_bone`, so a chain resting
-        on the plate by its end (a hand) moves about that contact rather than
-        about the skeleton's root.
-        """
-        return self._tree[0]
+        """(m,) int64: parent bone of each bone in :attr:`tree`, -1 for roots."""
+        return self.tree[0]
 
     @property
     def pivots(self) -> np.ndarray:
         """(m,) int64: the joint each bone turns about (shared with its parent)."""
-        return self._tree[1]
+        return self.tree[1]
 
     @cached_property
     def order(self) -> np.ndarray:

@@ -164,7 +164,10 @@ def test_bones_in_any_order_give_the_same_pose(tpose_rig):
     expected = rig.pose(angles)
     for perm in (np.arange(rig.bone_count)[::-1], rng.permutation(rig.bone_count)):
         bones = rig.bones[perm]
-        T = kin.forward_kinematics(rig.joints, bones, angles[:, perm])
+        new = np.argsort(perm)  # old bone index -> new
+        parents = np.where(rig.parents[perm] < 0, -1, new[np.maximum(rig.parents[perm], 0)])
+        T = kin.forward_kinematics(rig.joints, bones, angles[:, perm], parents, kin.topological_order(parents),
+                                   rig.pivots[perm])
         posed = kin.skin(kin.lbs_matrix(rig.vertices, rig.weights[:, perm]), T)
         np.testing.assert_allclose(posed, expected, rtol=0, atol=1e-10)
         np.testing.assert_allclose(kin.posed_joints(rig.joints, bones, T), rig.posed_joints(angles), atol=1e-10)

@@ -346,7 +346,7 @@ class EditorState:
         angles, R = self.get_pose()
         extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict(),
                  "print_frame": self.print_frame.to_dict()}
-        posefile.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R)
+        posefile.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R, tree=self.rig.tree)
         return p
 
     def load_pose(self, path) -> Path:
@@ -366,7 +366,8 @@ class EditorState:
             skeleton, or a ``print_rotation`` that is not a rotation.
         """
         p = self.resolve_path(path)
-        angles = posefile.read_pose(p, self.rig.bones)
+        angles = posefile.read_pose(p, self.rig.bones, tree=self.rig.tree,
+                                   root_bone=self.rig.root_bone)
         self.set_angles(angles, rotation=posefile.read_print_rotation(p, self.rig.dim))
         return p
 
@@ -381,7 +382,7 @@ class EditorState:
         """The current pose and print rotation as a pose JSON file's bytes."""
         angles, R = self.get_pose()
         return _file_bytes("pose.json", lambda p: posefile.write_pose(p, angles, self.rig.bones, self.rig.joints,
-                                                                 rotation=R,
+                                                                 rotation=R, tree=self.rig.tree,
                                                                  extra={"print_frame": self.print_frame.to_dict()}))
 
     def posed_on_plate(self) -> np.ndarray:
