@@ -569,9 +569,17 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
 @rig_options
 @click.option("--demo", "demo_figure", is_flag=True, help="Open the built-in tpose figure.")
 @click.option("--port", default=None, type=click.IntRange(1, 65535), help="Port (default: a free one from 8080).")
-@click.option("--host", default="127.0.0.1", show_default=True, help="Address to bind.")
-def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, demo_figure, port, host):
-    """Pose MODEL in the browser: live supports, optimize, export."""
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to bind; another than a loopback address opens the app to the network (its token "
+                   "still required).")
+@click.option("--workdir", type=click.Path(file_okay=False, exists=True), default=".", show_default=True,
+              help="The only folder the page reads and writes files in.")
+def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, demo_figure, port, host,
+         workdir):
+    """Pose MODEL in the browser: live supports, optimize, export.
+
+    Only the address printed (with its token) opens the page.
+    """
     from .ui.app import run_app
 
     if demo_figure:
@@ -581,7 +589,7 @@ def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, ca
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
                        keep_units=keep_units)
     _say_frame(rig, frame)
-    run_app(rig, host=host, port=port, block=True, frame=frame)
+    run_app(rig, host=host, port=port, block=True, frame=frame, workdir=workdir)
 
 
 # --------------------------------------------------------------------------- #

@@ -55,6 +55,11 @@ ORIENT_SEEDS = 4
 #: The steepest threshold the search uses, degrees (90 would count vertical walls).
 MAX_SEARCH_ANGLE = 89.0
 
+#: The largest swarm and the most iterations a search takes (5000 particles measure the bunny in
+#: about 300 MB; more is a mistake or an attack on the browser app, not a better search).
+MAX_PARTICLES = 5000
+MAX_ITERATIONS = 100_000
+
 #: Velocity-update coefficients of the swarm. ``standard`` is the
 #: constriction-factor swarm (Clerc & Kennedy); ``libigl`` reproduces igl::pso's.
 #: The searches (:data:`supportless.search.OPTIMIZERS`).
@@ -193,8 +198,10 @@ class SearchSettings:
             raise InputError(None, f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
         if self.optimizer not in OPTIMIZER_NAMES:
             raise InputError(None, f"optimizer must be one of {OPTIMIZER_NAMES}, not {self.optimizer!r}")
-        if self.particles < 1 or self.iterations < 0 or (self.polish or 0) < 0:
-            raise InputError(None, "particles must be at least 1, iterations and polish at least 0")
+        if not (1 <= self.particles <= MAX_PARTICLES and 0 <= self.iterations <= MAX_ITERATIONS
+                and 0 <= (self.polish or 0) <= MAX_ITERATIONS):
+            raise InputError(None, f"particles must be within 1..{MAX_PARTICLES}, iterations and polish within "
+                                   f"0..{MAX_ITERATIONS}")
         if self.orient not in ORIENT_MODES:
             raise InputError(None, f"orient must be one of {ORIENT_MODES}, not {self.orient!r}")
         if self.orient_seeds < 0:

@@ -70,12 +70,14 @@ def test_page_url():
     from supportless.ui.ports import page_url
 
     assert page_url("127.0.0.1", 8080) == "http://127.0.0.1:8080"
+    assert page_url("127.0.0.1", 8080, "abc") == "http://127.0.0.1:8080/?token=abc"
     assert page_url("0.0.0.0", 8081) == "http://localhost:8081"
     assert page_url("::1", 8082) == "http://[::1]:8082"
 
 
 def test_app_serves_on_localhost_only(app):
-    assert app.url == f"http://127.0.0.1:{app.port}"
+    assert app.url == f"http://127.0.0.1:{app.port}/?token={app.guard.token}"
+    assert len(app.guard.token) >= 32
     assert app.server.get_host() == "127.0.0.1"
 
 
@@ -157,6 +159,7 @@ def test_planar_rig(tmp_path, rig_cache_dir):
 
 
 def test_save_and_load_pose(app, rig, tmp_path):
+    app.state.workdir = tmp_path  # the page reads and writes only there
     app.reset()
     app.state.set_bone_angles(rig.bone_count - 1, [0, 0, 25.0])
     R = rotation_between(rig.up, np.array([1.0, 0, 0]))
@@ -223,6 +226,7 @@ def test_print_view_shows_the_pose_turned_onto_the_plate(app, rig):
 
 
 def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_path):
+    app.state.workdir = tmp_path  # the page reads and writes only there
     app.reset()
     app.wait_idle()
     other = tmp_path / "other.json"
@@ -253,6 +257,7 @@ def test_bad_pose_files_show_an_error_and_the_app_keeps_running(app, rig, tmp_pa
 
 
 def test_export_mesh_on_the_plate(app, rig, tmp_path):
+    app.state.workdir = tmp_path  # the page reads and writes only there
     import trimesh
 
     app.reset()

@@ -22,6 +22,7 @@ turned by the state's print rotation onto the plate
 from __future__ import annotations
 
 import logging
+import sys
 import threading
 import time
 from typing import Callable
@@ -33,6 +34,7 @@ from ..orientation import rotation_axis_angle
 from ..settings import SearchSettings
 from .front import FrontBrowser
 from .panel import Panel, measures_markdown
+from .guard import Guard, is_loopback
 from .ports import page_url, start_server
 from .scene import Scene
 from .state import FRAMES, EditorState
@@ -96,9 +98,11 @@ class App:
         self._dragging = False
         self.view = {"frame": "standing", "show_risky": True, "weights": False}
 
-        self.server = start_server(host, port, f"supportless: {rig.name}", verbose)
+        #: checks the token, Host and Origin of every request (:mod:`supportless.ui.guard`)
+        self.guard = Guard(host)
+        self.server = start_server(host, port, f"supportless: {rig.name}", verbose, self.guard)
         self.port = int(self.server.get_port())
-        self.url = page_url(host, self.port)
+        self.url = page_url(host, self.port, self.guard.token)
         self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo)
         self.front = FrontBrowser(self.state)
         self.panel = Panel(self.server.gui, self)
@@ -165,19 +169,19 @@ class App:
         return self._attempt("cannot export the mesh", self.state.export_mesh, path,
                              done=lambda p: f"exported the posed mesh to {p}")
 
-    def download(self, filename: str, make: Callable[[], bytes]) -> None:
-        """Send ``make()`` to every connected browser as a file download."""
+    def download(self, filename: str, make: Callable[[], bytes], client=None) -> None:
+        """Send ``make()`` as a file download to ``client`` (the browser that asked), or to every one when None."""
         try:
             data = make()
         except Exception as exc:  # noqa: BLE001 - reported in the page
             self._error(f"cannot prepare {filename}: {exc}")
             return
-        clients = self.server.get_clients()
+        clients = [client] if client is not None else list(self.server.get_clients().values())
         if not clients:
             self._error("no browser connected to send the download to")
             return
-        for client in clients.values():
-            client.send_file_download(filename, data, save_immediately=True)
+        for c in clients:
+            c.send_file_download(filename, data, save_immediately=True)
         self._set_status(f"sent {filename} ({len(data) // 1024} KiB)")
 
     def change_setting(self, name: str, value) -> bool:
@@ -418,7 +422,8 @@ class App:
 
 
 def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser: bool = False,
-            block: bool = True, verbose: bool = True, settings: SearchSettings | None = None, frame=None) -> App:
+            block: bool = True, verbose: bool = False, settings: SearchSettings | None = None, frame=None,
+            workdir=None) -> App:
     """Serve the viewer of ``rig``.
 
     Parameters
@@ -434,19 +439,27 @@ def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser:
     block : bool
         Serve until Ctrl-C (then stop and return the app); False returns at once.
     verbose : bool
-        Let viser print its banner.
+        Let viser print its banner (off: its address lacks the token).
     settings : SearchSettings, optional
         Search settings the panel starts with.
     frame : supportless.printframe.PrintFrame, optional
         How exported meshes are printed (default: the rest pose 60 mm tall).
+    workdir : str or os.PathLike, optional
+        The only folder the page's files are read from and written to
+        (default: the current folder).
 
     Returns
     -------
     app : App
         ``app.url``, ``app.port``, ``app.stop()``.
     """
-    app = App(rig, host=host, port=port, verbose=verbose, settings=settings, frame=frame)
+    app = App(rig, host=host, port=port, verbose=verbose, settings=settings, frame=frame, workdir=workdir)
     logger.info("supportless viewer at %s", app.url)
+    if not is_loopback(host):
+        print(f"supportless: warning: the app listens on {host}: anyone who can reach this machine on port "
+              f"{app.port} and has the address below (with its token) can pose the model and write files in "
+              f"{app.state.workdir.resolve()}; --host 127.0.0.1 keeps it to this computer", file=sys.stderr,
+              flush=True)
     if open_browser:
         import webbrowser
 

@@ -252,9 +252,10 @@ class Panel:
         load.on_click(lambda _e: app.load_pose(pose_path.value))
         export.on_click(lambda _e: app.export_mesh(mesh_path.value))
         upload.on_upload(lambda _e: app.load_pose_bytes(upload.value.name, upload.value.content))
-        dl_pose.on_click(lambda _e: app.download(f"{name}-pose.json", state.pose_bytes))
-        dl_stl.on_click(lambda _e: app.download(f"{name}-posed.stl", lambda: state.mesh_bytes("stl")))
-        dl_3mf.on_click(lambda _e: app.download(f"{name}-posed.3mf", lambda: state.mesh_bytes("3mf")))
+        # a download goes to the browser that asked, no other
+        dl_pose.on_click(lambda e: app.download(f"{name}-pose.json", state.pose_bytes, e.client))
+        dl_stl.on_click(lambda e: app.download(f"{name}-posed.stl", lambda: state.mesh_bytes("stl"), e.client))
+        dl_3mf.on_click(lambda e: app.download(f"{name}-posed.3mf", lambda: state.mesh_bytes("3mf"), e.client))
 
     # ------------------------------------------------------------------ show
     def show_status(self, text: str, error: bool = False) -> None:

@@ -10,6 +10,7 @@ import errno
 import socket
 
 from ..errors import InputError
+from .guard import Guard, guarded_serve
 
 __all__ = ["DEFAULT_PORT", "check_host", "find_free_port", "page_url", "port_is_free", "port_taken_message",
            "start_server"]
@@ -96,18 +97,18 @@ def port_taken_message(host: str, port: int) -> str:
     return f"port {port} on {host} is taken; use --port N"
 
 
-def page_url(host: str, port: int) -> str:
-    """The address to open in a browser for a server bound to ``host:port``.
+def page_url(host: str, port: int, token: str | None = None) -> str:
+    """The address to open in a browser for a server bound to ``host:port`` (with its token).
 
     A server on every interface (``0.0.0.0``, ``::``) is shown as
     ``localhost``; IPv6 addresses are bracketed.
     """
     shown = "localhost" if host in ("0.0.0.0", "::", "") else f"[{host}]" if ":" in host else host
-    return f"http://{shown}:{port}"
+    return f"http://{shown}:{port}" + ("" if token is None else f"/?token={token}")
 
 
-def start_server(host: str, port: int | None, label: str, verbose: bool = True):
-    """A viser server listening on ``host:port``.
+def start_server(host: str, port: int | None, label: str, verbose: bool = True, guard=None):
+    """A viser server listening on ``host:port``, every request checked by ``guard``.
 
     Parameters
     ----------
@@ -118,6 +119,9 @@ def start_server(host: str, port: int | None, label: str, verbose: bool = True):
         Title of the page.
     verbose : bool
         Let viser print its banner.
+    guard : supportless.ui.guard.Guard, optional
+        Checks the token, Host and Origin of every request (default: a new
+        one with a random token); its ``port`` is set.
 
     Returns
     -------
@@ -137,7 +141,10 @@ def start_server(host: str, port: int | None, label: str, verbose: bool = True):
         port = find_free_port(host, DEFAULT_PORT)
     elif not port_is_free(host, port):
         raise InputError(None, port_taken_message(host, port))
-    server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
+    guard = guard if guard is not None else Guard(host)
+    guard.port = port
+    with guarded_serve(guard):
+        server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
     if server.get_port() != port:  # viser moved on by itself: the port was taken meanwhile
         server.stop()
         raise InputError(None, port_taken_message(host, port))

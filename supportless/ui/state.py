@@ -49,6 +49,7 @@ import numpy as np
 from .. import io as sio
 from .. import posefile
 from ..energies.exact import intersecting_faces
+from ..errors import InputError
 from ..energies.overhang import risky_faces
 from ..geometry import place_on_plate, print_pose, print_transform
 from ..kinematics import matrix_to_euler
@@ -231,6 +232,8 @@ class EditorState:
         angles = np.array(angles, np.float64)
         if angles.shape != self._angles.shape:
             raise ValueError(f"pose has shape {angles.shape}, the rig needs {self._angles.shape}")
+        if not np.all(np.isfinite(angles)):
+            raise ValueError("pose angles must be finite numbers")
         R = None if rotation is None else _check_rotation(rotation, self.rig.dim)
         with self._lock:
             if record:
@@ -264,9 +267,16 @@ class EditorState:
             Undo grouping (default: one step per call unless the same bone is
             edited again within a second).
         """
+        bone = self._check_bone(bone)
         angles = self.get_angles()
         angles[bone] = np.radians(np.asarray(degrees, np.float64))
         self.set_angles(angles, key=("bone", bone) if key is None else key, origin=origin)
+
+    def _check_bone(self, bone) -> int:
+        """A 0-based bone index of the rig, or ValueError (a client may send anything)."""
+        if isinstance(bone, bool) or not isinstance(bone, (int, np.integer)) or not 0 <= bone < self.rig.bone_count:
+            raise ValueError(f"bone {bone!r} is not one of this rig's {self.rig.bone_count} bones")
+        return int(bone)
 
     def set_bone_rotation(self, bone: int, rotation, *, record: bool = False, origin: str | None = "gizmo") -> None:
         """Turn a bone to a rotation given in world coordinates (what the gizmo shows).
@@ -281,8 +291,11 @@ class EditorState:
         record : bool
             Make it an undo step (a drag records once, when it starts).
         """
+        bone = self._check_bone(bone)
         R = np.asarray(rotation, np.float64)
         d = self.rig.dim
+        if R.ndim != 2 or R.shape[0] != R.shape[1] or R.shape[0] < d or not np.all(np.isfinite(R)):
+            raise ValueError("a bone's rotation must be a finite 3x3 matrix")
         angles = self.get_angles()
         parent = int(self.rig.parents[bone])
         local = R[:d, :d] if parent < 0 else self.rig.transforms(angles)[parent][:, :d].T @ R[:d, :d]
@@ -297,9 +310,7 @@ class EditorState:
         ValueError
             For a bone number outside ``0..m-1``.
         """
-        if not 0 <= bone < self.rig.bone_count:
-            raise ValueError(f"bone {bone} out of range 0..{self.rig.bone_count - 1}")
-        self._selected = int(bone)
+        self._selected = self._check_bone(bone)
         self._notify("selection")
 
     def checkpoint(self) -> None:
@@ -329,10 +340,31 @@ class EditorState:
         self.set_angles(self.rig.rest_angles(), rotation=np.eye(self.rig.dim))
 
     # ---------------------------------------------------------------- files
-    def resolve_path(self, path) -> Path:
-        """``path`` with ``~`` expanded, relative to :attr:`workdir`."""
-        p = Path(str(path).strip()).expanduser()
-        return p if p.is_absolute() else self.workdir / p
+    def resolve_path(self, path, *, new: bool = False) -> Path:
+        """``path`` inside :attr:`workdir`, or :class:`~supportless.errors.InputError`.
+
+        The path is taken relative to the folder, with ``..`` and symbolic
+        links resolved; one that leaves the folder (absolute elsewhere, ``..``,
+        ``~``, a link pointing out, a sibling folder) is refused with the same
+        message whether or not it exists. With ``new`` (a file to write) the
+        folder it goes in must exist, and a name already taken becomes
+        ``NAME-1.ext``, ``NAME-2.ext``, ...: nothing is overwritten.
+        """
+        text = str(path).strip()
+        root = self.workdir.resolve()
+        p = (root / text).resolve() if text and not text.startswith("~") else None
+        if p is None or p == root or not p.is_relative_to(root):
+            raise InputError(None, f"{text!r}: the app reads and writes files only inside {root}; give a name "
+                                   "in that folder")
+        if not new:
+            return p
+        if not p.parent.is_dir():
+            raise InputError(None, f"{text!r}: the folder {p.parent} does not exist")
+        candidate, k = p, 0
+        while candidate.exists() or candidate.is_symlink():
+            k += 1
+            candidate = p.with_name(f"{p.stem}-{k}{p.suffix}")
+        return candidate
 
     def save_pose(self, path) -> Path:
         """Write the current pose and print rotation as a pose JSON file (with its objective and the settings).
@@ -342,7 +374,7 @@ class EditorState:
         path : pathlib.Path
             Where it was written.
         """
-        p = self.resolve_path(path)
+        p = self.resolve_path(path, new=True)
         angles, R = self.get_pose()
         extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict(),
                  "print_frame": self.print_frame.to_dict()}
@@ -366,17 +398,19 @@ class EditorState:
             skeleton, or a ``print_rotation`` that is not a rotation.
         """
         p = self.resolve_path(path)
-        angles = posefile.read_pose(p, self.rig.bones, tree=self.rig.tree,
-                                   root_bone=self.rig.root_bone)
-        self.set_angles(angles, rotation=posefile.read_print_rotation(p, self.rig.dim))
+        self._load_pose_file(p)
         return p
+
+    def _load_pose_file(self, p: Path) -> None:
+        angles = posefile.read_pose(p, self.rig.bones, tree=self.rig.tree, root_bone=self.rig.root_bone)
+        self.set_angles(angles, rotation=posefile.read_print_rotation(p, self.rig.dim))
 
     def load_pose_bytes(self, name: str, content: bytes) -> None:
         """Load an uploaded pose file's content (same checks as :meth:`load_pose`)."""
         with tempfile.TemporaryDirectory() as tmp:
             p = Path(tmp) / (Path(name).name or "pose.json")
             p.write_bytes(content)
-            self.load_pose(p)
+            self._load_pose_file(p)
 
     def pose_bytes(self) -> bytes:
         """The current pose and print rotation as a pose JSON file's bytes."""
@@ -453,7 +487,7 @@ class EditorState:
         path : pathlib.Path
             Where it was written.
         """
-        p = self.resolve_path(path)
+        p = self.resolve_path(path, new=True)
         sio.write_mesh(p, self.print_frame.place(self._frame_vertices(frame)), self.rig.faces)
         return p
 

@@ -1,0 +1,152 @@
+"""Who may open the browser app: the page the tool printed, and nobody else.
+
+The app is a local server, so it is a door. As Jupyter Server does, every
+run makes a random token; the address the tool prints and opens carries it
+(``http://127.0.0.1:8080/?token=...``), and the page keeps it in a cookie
+(``HttpOnly``, ``SameSite=Strict``, named after the port) for its later
+requests and its websocket. Every request is checked before viser sees it:
+
+* the token, from the query or the cookie (compared in constant time);
+* the Host header: the bound address or a loopback name when the server
+  listens on a loopback address (a DNS-rebinding page names its own host);
+* the Origin of a websocket: the server's own (a page from another site
+  never connects, even with the user's cookie).
+
+A refused request gets 403 and one line, never the page or the scene.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hmac
+import http
+import ipaddress
+import secrets
+from http.cookies import SimpleCookie
+from urllib.parse import parse_qs, urlsplit
+
+__all__ = ["Guard", "guarded_serve", "is_loopback"]
+
+LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
+
+
+def is_loopback(host: str) -> bool:
+    """True for ``localhost`` and loopback addresses (127.0.0.0/8, ::1)."""
+    host = host.strip("[]").lower()
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _hostname(value: str) -> str:
+    """The name of a Host header or an Origin's netloc, port and brackets dropped, lower case."""
+    return (urlsplit(f"//{value}").hostname or "").lower()
+
+
+class Guard:
+    """The checks of one server: its token, the names it answers to.
+
+    Parameters
+    ----------
+    host : str
+        The address the server is bound to.
+    token : str, optional
+        Default: 32 random URL-safe bytes (:func:`secrets.token_urlsafe`).
+    """
+
+    def __init__(self, host: str, token: str | None = None):
+        self.host = host
+        self.token = token or secrets.token_urlsafe(32)
+        self.port: int | None = None  # known once the server listens: names the cookie
+
+    @property
+    def cookie_name(self) -> str:
+        return f"supportless-token-{self.port}"
+
+    def _host_allowed(self, header: str | None) -> bool:
+        if not is_loopback(self.host):  # reachable from the network: the token alone decides (said when started)
+            return True
+        name = _hostname(header or "")
+        return name in LOOPBACK_NAMES or name == self.host.strip("[]").lower() or is_loopback(name)
+
+    def _token_of(self, request) -> tuple[str | None, bool]:
+        """The token the request carries and whether it came in the query."""
+        query = parse_qs(urlsplit(request.path).query).get("token")
+        if query:
+            return query[0], True
+        cookie = SimpleCookie()
+        try:
+            cookie.load(request.headers.get("Cookie", ""))
+        except Exception:  # noqa: BLE001 - a malformed cookie is no token
+            return None, False
+        morsel = cookie.get(self.cookie_name)
+        return (morsel.value if morsel else None), False
+
+    def refusal(self, request) -> str | None:
+        """Why ``request`` is refused, or None when it may go on.
+
+        Parameters
+        ----------
+        request : websockets.http11.Request
+        """
+        try:
+            return self._refusal(request)
+        except Exception:  # noqa: BLE001 - a header given twice, a malformed value: refused, never a 500
+            return "malformed request headers"
+
+    def _refusal(self, request) -> str | None:
+        if not self._host_allowed(request.headers.get("Host")):
+            return "this app answers only to its own address (Host header refused)"
+        token, _ = self._token_of(request)
+        if token is None or not hmac.compare_digest(token.encode(), self.token.encode()):
+            return "open the address supportless printed, with its token"
+        if request.headers.get("Upgrade", "").lower() == "websocket":
+            origin = urlsplit(request.headers.get("Origin") or "")
+            if origin.scheme not in ("http", "https") or \
+                    origin.netloc.lower() != (request.headers.get("Host") or "").lower():
+                return "a page from another origin may not connect"
+        return None
+
+    def wrap(self, process_request):
+        """``process_request`` of websockets' server with the checks before it."""
+
+        async def guarded(connection, request):
+            why = self.refusal(request)
+            if why is not None:
+                return connection.respond(http.HTTPStatus.FORBIDDEN, f"supportless: {why}\n")
+            response = process_request(connection, request) if process_request is not None else None
+            if hasattr(response, "__await__"):
+                response = await response
+            token, from_query = self._token_of(request)
+            if response is not None and from_query:  # the page keeps the token for its websocket
+                response.headers["Set-Cookie"] = (f"{self.cookie_name}={token}; Path=/; HttpOnly; "
+                                                  "SameSite=Strict")
+            return response
+
+        return guarded
+
+
+@contextlib.contextmanager
+def guarded_serve(guard: Guard):
+    """While open, websockets servers started (by viser) check every request with ``guard`` first.
+
+    viser starts its server inside :class:`viser.ViserServer`'s constructor
+    and offers no hook for the handshake, so the constructor runs inside this
+    block, which wraps the ``process_request`` viser passes to
+    ``websockets.asyncio.server.serve``.
+    """
+    import websockets.asyncio.server as ws_server
+
+    original = ws_server.serve
+
+    def serve(*args, process_request=None, **kwargs):
+        return original(*args, process_request=guard.wrap(process_request), **kwargs)
+
+    ws_server.serve = serve
+    try:
+        yield
+    finally:
+        ws_server.serve = original
