@@ -7,6 +7,7 @@ values the widgets would never send.
 
 import http.client
 import os
+import time
 from urllib.parse import urlsplit
 
 import numpy as np
@@ -239,3 +240,29 @@ def test_bone_edits_from_a_client_are_checked(branch_rig, tmp_path):
     with pytest.raises(ValueError, match="finite"):
         state.set_bone_rotation(0, np.full((3, 3), np.inf))
     np.testing.assert_array_equal(state.get_angles(), before)
+
+
+def test_a_client_changes_values_only_and_no_disabled_button_fires(app):
+    import asyncio
+
+    from viser import _messages
+
+    from supportless.ui.guard import value_updates
+
+    interface = app.server._websock_server
+    handlers = interface._incoming_handlers[_messages.GuiUpdateMessage]
+    assert app.server.gui._handle_gui_updates not in handlers  # viser's own handler is behind the filter
+    loop = interface._background_event_loop
+    particles = app.panel.settings["particles"]
+    message = _messages.GuiUpdateMessage(particles._impl.uuid, {"max": 10 ** 9, "disabled": True})
+    for handler in handlers:
+        asyncio.run_coroutine_threadsafe(handler(0, message), loop).result(10)
+    assert particles.max == 5000 and not particles.disabled  # a limit or a state is not the client's to set
+    assert value_updates(particles, {"value": 12, "max": 1}) == {"value": 12}
+    button = app.panel.optimize
+    assert value_updates(button, {"value": True}) == {"value": True}
+    button.disabled = True
+    try:
+        assert value_updates(button, {"value": True}) == {}  # a disabled button does not fire
+    finally:
+        button.disabled = False

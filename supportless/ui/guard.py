@@ -25,7 +25,7 @@ import secrets
 from http.cookies import SimpleCookie
 from urllib.parse import parse_qs, urlsplit
 
-__all__ = ["Guard", "guarded_serve", "is_loopback"]
+__all__ = ["Guard", "accept_values_only", "guarded_serve", "is_loopback", "value_updates"]
 
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
 
@@ -150,3 +150,51 @@ def guarded_serve(guard: Guard):
         yield
     finally:
         ws_server.serve = original
+
+
+def value_updates(handle, updates: dict) -> dict:
+    """What a client may change of a widget: its ``value``, unless the widget is disabled.
+
+    Parameters
+    ----------
+    handle : viser GUI handle
+    updates : dict
+        Property name -> value, as the client sent them.
+
+    Returns
+    -------
+    allowed : dict
+        ``{"value": ...}`` or empty.
+    """
+    if getattr(handle._impl.props, "disabled", False):
+        return {}
+    return {k: v for k, v in updates.items() if k == "value"}
+
+
+def accept_values_only(server) -> None:
+    """A page may change a widget's value or click an enabled button, and nothing else.
+
+    viser applies whatever property a client sends (a slider's limits,
+    ``disabled``, ...), so a client could lift a limit or fire a disabled
+    button. This puts a filter before viser's own handler of GUI updates: it
+    keeps only ``value`` and drops any update of a disabled widget. (The values
+    themselves are then checked by the app as the command line checks them.)
+
+    Parameters
+    ----------
+    server : viser.ViserServer
+    """
+    from viser import _messages
+
+    gui = server.gui
+    interface = gui._websock_interface
+    original = gui._handle_gui_updates
+
+    async def values_only(client_id, message) -> None:
+        handle = gui._gui_input_handle_from_uuid.get(message.uuid)
+        updates = None if handle is None else value_updates(handle, message.updates)
+        if updates:
+            await original(client_id, _messages.GuiUpdateMessage(message.uuid, updates))
+
+    interface.unregister_handler(_messages.GuiUpdateMessage, original)
+    interface.register_handler(_messages.GuiUpdateMessage, values_only)

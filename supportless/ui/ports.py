@@ -10,7 +10,7 @@ import errno
 import socket
 
 from ..errors import InputError
-from .guard import Guard, guarded_serve
+from .guard import Guard, accept_values_only, guarded_serve
 
 __all__ = ["DEFAULT_PORT", "check_host", "find_free_port", "page_url", "port_is_free", "port_taken_message",
            "start_server"]
@@ -145,6 +145,7 @@ def start_server(host: str, port: int | None, label: str, verbose: bool = True, 
     guard.port = port
     with guarded_serve(guard):
         server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
+    accept_values_only(server)
     if server.get_port() != port:  # viser moved on by itself: the port was taken meanwhile
         server.stop()
         raise InputError(None, port_taken_message(host, port))
