@@ -343,12 +343,9 @@ class EditorState:
     def resolve_path(self, path, *, new: bool = False) -> Path:
         """``path`` inside :attr:`workdir`, or :class:`~supportless.errors.InputError`.
 
-        The path is taken relative to the folder, with ``..`` and symbolic
-        links resolved; one that leaves the folder (absolute elsewhere, ``..``,
-        ``~``, a link pointing out, a sibling folder) is refused with the same
-        message whether or not it exists. With ``new`` (a file to write) the
-        folder it goes in must exist, and a name already taken becomes
-        ``NAME-1.ext``, ``NAME-2.ext``, ...: nothing is overwritten.
+        Relative to the folder, ``..`` and symbolic links resolved; one that leaves it (elsewhere, ``..``,
+        ``~``, a link out, a sibling folder) is refused alike whether or not it exists. With ``new`` (a file
+        to write) its folder must exist and a taken name becomes ``NAME-1.ext``, ...: nothing is overwritten.
         """
         text = str(path).strip()
         root = self.workdir.resolve()
