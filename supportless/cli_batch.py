@@ -21,7 +21,8 @@ __all__ = ["batch"]
                    "contact_sheet.png.")
 @click.option("--up", default="y", show_default=True, help="Printing direction of the models: x|y|z|-x|-y|-z.")
 @click.option("--height-mm", type=click.FloatRange(min=0.01), default=None,
-              help="Scale each model to this height along --up (default: as read).")
+              help="Print each model's rest pose this tall along --up, in millimetres [default: 60]; the STL "
+                   "is +Z up, in millimetres, on the plate.")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
               help="Rig cache shared by the workers (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
