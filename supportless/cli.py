@@ -443,19 +443,13 @@ def _check_mesh_path(path) -> None:
         raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS + ('gltf',))}")
 
 
-def _duration(seconds: float) -> str:
-    """``1 h 02 min`` / ``12 min`` / ``40 s`` of a (signed) duration, shown as its size."""
-    seconds = abs(float(seconds))
-    if seconds >= 3600:
-        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
-    return f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
-
-
 def _grams_and_time(side: dict) -> str:
     """``6.4 g, 26 min of printing`` of one side of a slice report."""
+    from .report import duration_text
+
     grams = f"{side['support_g']:.1f} g" if side.get("support_g") is not None else "? g"
     t = side.get("support_time_s")
-    return grams + (f", {_duration(t)} of printing" if t is not None else "")
+    return grams + (f", {duration_text(t)} of printing" if t is not None else "")
 
 
 # --------------------------------------------------------------------------- #
@@ -476,6 +470,7 @@ def slice_check_cmd(original, posed, up, height_mm, posed_as, printer_profile, a
     from .geometry import parse_up
     from .io import read_mesh
     from .printframe import print_frame
+    from .report import duration_text
     from .slicer import SlicerError, SlicerNotFound, slice_check
 
     up_vec = parse_up(up)
@@ -497,7 +492,7 @@ def slice_check_cmd(original, posed, up, height_mm, posed_as, printer_profile, a
     click.echo(f"  posed:    {a['support_mm']:8.0f} mm  ({a['support_cm3']:.2f} cm3, {_grams_and_time(a)})")
     if b["support_time_s"] is not None and a["support_time_s"] is not None:
         saved = b["support_time_s"] - a["support_time_s"]
-        click.echo(f"  printing time of the supports: {_duration(saved)} {'less' if saved >= 0 else 'more'}")
+        click.echo(f"  printing time of the supports: {duration_text(saved)} {'less' if saved >= 0 else 'more'}")
     red = report["reduction_percent"]
     click.echo(f"  reduction: {red:.1f} %" if red is not None else "  reduction: n/a (no support before)")
 

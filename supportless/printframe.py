@@ -23,7 +23,8 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["DEFAULT_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "print_frame", "rig_print_frame", "rotation_to_z"]
+__all__ = ["DEFAULT_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
+           "rotation_to_z"]
 
 #: The printed height of a model's rest pose when the user gives none, mm: a figurine.
 DEFAULT_HEIGHT_MM = 60.0
@@ -67,6 +68,28 @@ def rotation_to_z(up) -> np.ndarray:
     return np.eye(3) + s * K + (1.0 - c) * (K @ K)
 
 
+def place_vertices(vertices: np.ndarray, up, scale: float, center_xy=(0.0, 0.0)) -> np.ndarray:
+    """Put a mesh on the bed: ``up`` to +Z, scaled, lowest point at z = 0, its x/y box centred at ``center_xy``.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    up : (3,) float
+    scale : float
+        Model units to mm.
+    center_xy : (2,) float
+        Where the centre of the x/y bounding box goes.
+
+    Returns
+    -------
+    placed : (n, 3) float64
+    """
+    v = (np.asarray(vertices, dtype=np.float64) @ rotation_to_z(up).T) * float(scale)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    return v + np.array([center_xy[0] - mid[0], center_xy[1] - mid[1], -lo[2]])
+
+
 @dataclass(frozen=True)
 class PrintFrame:
     """The map from a model's frame to a printer's: ``up`` to +Z, millimetres, centred, on the plate.
@@ -98,11 +121,6 @@ class PrintFrame:
     how: str = "default"
     unit: str = "units"
 
-    @property
-    def rotation(self) -> np.ndarray:
-        """(3, 3) float64: the rotation taking ``up`` to +Z (the identity for a planar figure)."""
-        return rotation_to_z(self.up) if len(self.up) == 3 else np.eye(2)
-
     def place(self, vertices: np.ndarray) -> np.ndarray:
         """Vertices in the print frame: turned so ``up`` is +Z, in mm, x/y centred on 0, lowest z = 0.
 
@@ -120,10 +138,7 @@ class PrintFrame:
         V = np.asarray(vertices, np.float64)
         if V.shape[1] == 2:
             return V - (V @ self.up).min() * self.up
-        P = (V @ self.rotation.T) * self.scale
-        lo, hi = P.min(axis=0), P.max(axis=0)
-        centre = 0.5 * (lo + hi)
-        return P - np.array([centre[0], centre[1], lo[2]])
+        return place_vertices(V, self.up, self.scale)
 
     def to_gltf(self, vertices: np.ndarray) -> np.ndarray:
         """Vertices as glTF wants them: the print frame with +Y up, in metres (x, z, -y) / 1000.

@@ -27,8 +27,8 @@ from .printframe import DEFAULT_HEIGHT_MM, PrintFrame, rig_print_frame
 from .profile import DEFAULT_DENSITY
 from .render import plot_convergence, render_before_after
 
-__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "pose_measures", "predicted_slicer", "reduction", "support_headline",
-           "write_pictures"]
+__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
+           "support_headline", "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -276,7 +276,7 @@ def _headline_text(h: dict) -> str:
     def side(g, mm, t, first):
         text = f"{g:.1f} g" if g is not None else "? g"
         text += f" ({mm:,.0f} mm of filament)" if first else f" ({mm:,.0f} mm)"
-        return text + (f", {_minutes(t)}" if t is not None else "")
+        return text + (f", {duration_text(t)} of printing" if t is not None else "")
 
     red = h["reduction_percent"]
     change = ("no support before" if red is None else f"{red:.0f} % less" if red >= 0 else f"{-red:.0f} % more")
@@ -287,14 +287,12 @@ def _headline_text(h: dict) -> str:
             f"({source}; printed {h['height_mm']:.4g} mm tall)")
 
 
-def _minutes(seconds: float) -> str:
-    """``1 h 02 min of printing`` / ``12 min of printing`` / ``40 s of printing``."""
+def duration_text(seconds: float) -> str:
+    """``1 h 02 min`` / ``12 min`` / ``40 s`` of a (signed) duration, shown as its size."""
     seconds = abs(float(seconds))
     if seconds >= 3600:
-        text = f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
-    else:
-        text = f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
-    return text + " of printing"
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    return f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
 
 
 def _cpu_count() -> int:

@@ -34,7 +34,7 @@ import numpy as np
 from .errors import InputError, SlicerError
 from .gcode import FILAMENT_DIAMETER_MM, mm_to_cm3, parse_filament_used, parse_print_time, read_gcode_tail
 from .io import check_mesh_arrays, read_mesh, write_mesh
-from .printframe import rotation_to_z
+from .printframe import place_vertices, rotation_to_z
 from .profile import DEFAULT_DENSITY, PrinterProfile
 from .report import reduction
 
@@ -172,29 +172,6 @@ def scale_for_height(vertices: np.ndarray, up: Sequence[float], height_mm: float
     if not np.isfinite(extent) or extent <= 0:
         raise InputError(None, "mesh has zero extent along the up direction: nothing to print")
     return float(height_mm) / extent
-
-
-def place_vertices(vertices: np.ndarray, up: Sequence[float], scale: float,
-                   center_xy: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
-    """Put a mesh on the bed: ``up`` to +Z, scaled, lowest point at z = 0, centred.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-    up : (3,) float
-    scale : float
-        Model units to mm.
-    center_xy : (2,) float
-        Where the centre of the XY bounding box goes.
-
-    Returns
-    -------
-    placed : (n, 3) float64
-    """
-    v = (np.asarray(vertices, dtype=np.float64) @ rotation_to_z(up).T) * float(scale)
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    mid = 0.5 * (lo + hi)
-    return v + np.array([center_xy[0] - mid[0], center_xy[1] - mid[1], -lo[2]])
 
 
 def _load_mesh(mesh: MeshLike, what: str) -> tuple[np.ndarray, np.ndarray]:

@@ -242,3 +242,14 @@ def dense_branch():
     finally:
         mp.undo()
     return rig, len(F2) // 8
+
+
+@pytest.fixture(scope="module")
+def branch_app(branch_rig, tmp_path_factory):
+    """The browser app of the branch figure on a free local port, for one test module."""
+    from supportless.ui import App
+
+    a = App(branch_rig, verbose=False, workdir=tmp_path_factory.mktemp("app"))
+    assert a.wait_idle(60)
+    yield a
+    a.stop()

@@ -33,11 +33,8 @@ def rig(branch_rig):
 
 
 @pytest.fixture(scope="module")
-def app(rig, tmp_path_factory):
-    a = App(rig, verbose=False, workdir=tmp_path_factory.mktemp("ui"))
-    assert a.wait_idle(60)
-    yield a
-    a.stop()
+def app(branch_app):
+    return branch_app
 
 
 def _other_bones(rig):
