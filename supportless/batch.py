@@ -97,6 +97,15 @@ def _failed(name: str, reason: str, seconds: float) -> dict:
     return {"model": name, "status": "failed", "reason": reason, "seconds": round(seconds, 2)}
 
 
+def _row_of(future, name: str) -> dict:
+    """A finished task's row; a worker that died under it (a crash in native code) is a failed row too."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 - run_model never raises: this is its worker dying (KilledWorker)
+        return _failed(name, f"the worker posing it died ({type(exc).__name__}: a crash in native code, such as "
+                             "TetGen or CGAL, on this model)", 0.0)
+
+
 def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_mm: float | None = None,
               cache_dir: str | None = None, slice_check: bool = False) -> dict:
     """Pose one model and write ``out/NAME/``; the Dask task. Never raises: a failure is a row.
@@ -286,11 +295,15 @@ def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict 
 
         client, cluster = _client(scheduler, workers)
         try:
-            futures = [client.submit(run_model, spec, str(out), dict(settings or {}), up, height_mm, cache_dir,
-                                     slice_check, key=f"supportless-{spec.name}-{time.time_ns()}", pure=False)
-                       for spec in todo]
+            names = {}
+            futures = []
+            for spec in todo:
+                futures.append(client.submit(run_model, spec, str(out), dict(settings or {}), up, height_mm,
+                                             cache_dir, slice_check, key=f"supportless-{spec.name}-{time.time_ns()}",
+                                             pure=False))
+                names[futures[-1].key] = spec.name
             for future in as_completed(futures):
-                row = future.result()
+                row = _row_of(future, names[future.key])
                 rows[row["model"]] = row
                 write_summary(out, list(rows.values()))
                 if on_result is not None:

@@ -155,3 +155,21 @@ def test_killing_a_run_midway_leaves_no_model_that_looks_finished(folder, tmp_pa
     assert rows["arm"]["status"] == rows["branch"]["status"] == "ok"
     _check_outputs(out, ["arm", "branch"])
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # the killed run's scratch is cleared
+
+
+def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback():
+    from distributed.scheduler import KilledWorker
+
+    from supportless.batch import _row_of
+
+    class Died:
+        def result(self):
+            raise KilledWorker("supportless-X-1", "tcp://127.0.0.1:1")
+
+    class Done:
+        def result(self):
+            return {"model": "Y", "status": "ok"}
+
+    row = _row_of(Died(), "X")
+    assert row["model"] == "X" and row["status"] == "failed" and "died" in row["reason"]
+    assert _row_of(Done(), "Y") == {"model": "Y", "status": "ok"}
