@@ -220,8 +220,11 @@ def write_contact_sheet(out: str | os.PathLike, rows: list[dict], columns: int =
     for i, r in enumerate(done):
         ax = fig.add_subplot(n_rows, columns, i + 1)
         ax.imshow(mpimg.imread(Path(out) / r["model"] / "before_after.png"))
-        red = r.get("predicted_reduction")
-        ax.set_title(r["model"] + ("" if red is None else f": support {-100 * red:+.0f} % (predicted)"), fontsize=11)
+        sliced = r.get("slicer_reduction") not in (None, "")  # the slicer's figure where it ran
+        red = r.get("slicer_reduction") if sliced else r.get("predicted_reduction")
+        source = "PrusaSlicer" if sliced else "predicted"
+        ax.set_title(r["model"] + ("" if red in (None, "") else f": support {-100 * float(red):+.0f} % ({source})"),
+                     fontsize=11)
         ax.axis("off")
     fig.tight_layout()
     path = Path(out) / "contact_sheet.png"

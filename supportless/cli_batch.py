@@ -63,8 +63,10 @@ def batch(in_dir, out_dir, up, height_mm, cache_dir, slice_check_flag, scheduler
             counts["skipped" if skipped else row["status"]] += 1
             what = "already done" if skipped else (f"{row['status']} in {row.get('seconds', 0):.0f} s"
                                                    + (f": {row['reason']}" if row.get("reason") else ""))
-            red = row.get("predicted_reduction")
-            extra = f", support {-100 * red:+.0f} % (predicted)" if red is not None and row["status"] == "ok" else ""
+            sliced = row.get("slicer_reduction") is not None  # the slicer's figure where it ran
+            red = row.get("slicer_reduction") if sliced else row.get("predicted_reduction")
+            extra = (f", support {-100 * red:+.0f} % ({'PrusaSlicer' if sliced else 'predicted'})"
+                     if red is not None and row["status"] == "ok" else "")
             progress.console.print(f"  {row['model']}: {what}{extra}")
             progress.advance(task)
 
