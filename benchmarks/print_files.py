@@ -95,7 +95,7 @@ def measure(name: str, model: Path, work: Path, cura_defs: Path | None) -> dict:
     data = json.loads(pose.read_text())
     zero = out / "rest-pose.json"
     write_pose(zero, np.zeros_like(np.asarray(data["angles"])), np.asarray(data["bones"]),
-               extra={"print_frame": data["print_frame"]})
+               extra={"print_frame": data["print_frame"]}, tree=(data["tree"]["parents"], data["tree"]["pivots"]))
     run(["supportless", "apply", str(model), "--pose", str(zero), "-o", str(rest)])
     r = json.loads(report.read_text())
     V, _ = read_mesh(stl)
