@@ -48,7 +48,7 @@ from scipy.optimize import minimize, nnls
 import models
 import supportless as sl
 from supportless.energies import slicer_model
-from supportless.energies.exact import intersecting_face_pairs
+from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.geometry import place_on_plate, print_pose
 from supportless.profile import default_profile, overhang_threshold, read_printer_profile
 from supportless.ranking import distinct_poses

@@ -27,7 +27,7 @@ import numpy as np
 import models
 import supportless as sl
 from models import SHARED, available
-from supportless.energies.exact import intersecting_face_pairs
+from supportless.copyleft.cgal import intersecting_face_pairs
 
 OPTIMIZERS = ("pso", "cma")
 

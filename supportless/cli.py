@@ -282,6 +282,11 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if slice_check_flag and not failed and not stopped:  # the slicer's figures lead the summary
         report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile)
     _print_results(console, report, verbose)  # after the files: a closed stdout (| head) loses nothing
+    if result.stats.get("fell_back_to_rest"):
+        turned = not np.allclose(result.rotation, np.eye(rig.dim))
+        click.echo(f"supportless: warning: {rig.name}: the pose found crosses itself as written "
+                   f"({result.stats['fell_back_to_rest']} triangle pairs); the rest pose"
+                   f"{', turned,' if turned else ''} is written instead", err=True)
     console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)

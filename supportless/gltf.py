@@ -1,20 +1,24 @@
-"""Rigged glTF/GLB characters: the skin in its bind pose, and the posed asset out.
+"""Rigged glTF/GLB characters: the skin as the file poses it, and the posed asset out.
 
 Read with pygltflib (trimesh drops skins). :func:`read_gltf_skin` returns every
-triangle of the asset in the **bind pose** in world space (+Y up, the file's
-units) with the skin weights of each vertex over the joints:
+triangle of the asset in its **rest pose** in world space (+Y up, the file's
+units) with the skin weights of each vertex over the joints. The rest pose is
+the one the file stores (the nodes' own transforms), skinned as the glTF
+specification defines it, which is what every viewer shows:
 
-* skinned primitives: ``world = G_mesh · v`` with the joints' bind globals
-  ``B_j = G_mesh · IBM_j⁻¹`` (``G_mesh`` the skinned node's global transform,
-  ``IBM_j`` the inverse bind matrix). Applying the glTF skinning formula
-  ``Σ w_j G_j IBM_j v`` with ``G_j = B_j`` gives the same points, so the bind
-  pose is exactly the pose the weights were painted in, whatever the default
-  pose of the nodes (an animation frame, arms down) is;
+* skinned primitives: ``world = Σ w_j G_j IBM_j v`` (``G_j`` the joint's
+  global transform, ``IBM_j`` its inverse bind matrix); the skinned node's own
+  transform is ignored, as the specification says, so an armature scaled 0.01
+  over centimetre vertices, or a mesh node scaled 100 that only the
+  armature's inverse bind matrices undo, both give the size the joints give;
 * rigid meshes (a mesh node under a joint, not skinned) follow their nearest
-  joint ancestor: weight 1 on it, placed where the bind pose puts that joint;
+  joint ancestor: weight 1 on it, placed by their own global transform;
 * JOINTS_n/WEIGHTS_n in every component type, normalised and sparse
   accessors, strips and fans; rows of weights that do not sum to 1 are
-  normalised (and counted); morph targets are ignored (and said).
+  normalised (and counted), weights that are not numbers are dropped (and
+  counted); morph targets are ignored (and said); Draco- and
+  meshopt-compressed primitives are decoded (:mod:`supportless.gltf_decode`);
+  a posed copy keeps them compressed.
 
 :func:`~supportless.joints.skeleton_from_joints` turns the joint hierarchy into the bones the
 search rotates, and :func:`write_posed_gltf` writes the original asset with a
@@ -72,11 +76,6 @@ def _load_document(path):
                          "export it again from the modelling tool") from None
     if doc is None:
         raise InputError(path, "not a readable glTF file; export it again from the modelling tool")
-    used = set(doc.extensionsRequired or []) | set(doc.extensionsUsed or [])
-    for ext in _COMPRESSION:
-        if ext in used:
-            raise InputError(path, f"the meshes are compressed with {ext}, which supportless cannot decode; "
-                             "export the model again without mesh compression")
     buffers = []
     for i, buf in enumerate(doc.buffers or []):
         uri = buf.uri
@@ -94,6 +93,11 @@ def _load_document(path):
             raise InputError(path, f"buffer {i} holds {len(data)} bytes but the file says {buf.byteLength}; "
                              "the file is truncated")
         buffers.append(data)
+    used = set(doc.extensionsRequired or []) | set(doc.extensionsUsed or [])
+    if any(ext in used for ext in _COMPRESSION):
+        from .gltf_decode import decode_compressed
+
+        buffers = decode_compressed(doc, buffers, path)
     return doc, buffers
 
 
@@ -243,16 +247,16 @@ def _apply(M: np.ndarray, X: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- #
-# the skin in the bind pose
+# the skin in the rest pose
 # --------------------------------------------------------------------------- #
 @dataclass
 class GltfSkin:
-    """All triangles of a glTF asset in its bind pose, with weights over the joints.
+    """All triangles of a glTF asset in its rest pose, with weights over the joints.
 
     Attributes
     ----------
     vertices : (n, 3) float64
-        Bind pose, world space, the file's units (+Y up).
+        Rest pose (the stored one), world space, the file's units (+Y up).
     faces : (f, 3) int64
         Per primitive, vertices not shared between primitives.
     part : (f,) int64
@@ -265,10 +269,8 @@ class GltfSkin:
     joint_names : list of str
     joint_parents : (J,) int64
         Nearest joint ancestor (-1 for none).
-    bind_globals : (N, 4, 4) float64
-        Every node's global transform in the bind pose.
-    default_globals : (N, 4, 4) float64
-        Every node's global transform as stored (the default pose).
+    rest_globals : (N, 4, 4) float64
+        Every node's global transform as stored (the rest pose).
     notes : list of str
         What was read and what was done (one line each).
     """
@@ -281,14 +283,13 @@ class GltfSkin:
     joint_nodes: np.ndarray
     joint_names: list
     joint_parents: np.ndarray
-    bind_globals: np.ndarray
-    default_globals: np.ndarray
+    rest_globals: np.ndarray
     notes: list = field(default_factory=list)
 
     @property
     def joint_positions(self) -> np.ndarray:
-        """(J, 3) float64: joints in the bind pose."""
-        return self.bind_globals[self.joint_nodes, :3, 3]
+        """(J, 3) float64: joints in the rest pose."""
+        return self.rest_globals[self.joint_nodes, :3, 3]
 
 
 def _triangles(mode, idx: np.ndarray) -> np.ndarray | None:
@@ -308,7 +309,7 @@ def _triangles(mode, idx: np.ndarray) -> np.ndarray | None:
 
 
 def read_gltf_skin(path) -> GltfSkin:
-    """Read a rigged glTF/GLB asset in its bind pose.
+    """Read a rigged glTF/GLB asset in its rest pose (the one the file stores).
 
     Parameters
     ----------
@@ -338,31 +339,23 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
     default = node_globals(locals_, parents)
     notes: list[str] = []
 
-    # joints: every node any skin lists, in first-seen order
+    # joints: every node any skin lists, in first-seen order; per skin the rest pose's joint
+    # matrices G_j · IBM_j (with no IBMs, identity by the spec, the vertices are in each joint's frame)
     joint_nodes: list[int] = []
-    ibm: dict[int, np.ndarray] = {}
-    skin_users: dict[int, int] = {}
-    skin_matrices: dict[int, np.ndarray] = {}  # per skin: (k, 4, 4) B_j · IBM_j, the bind pose's joint matrices
-    for n_idx, node in enumerate(nodes):
-        if node.skin is not None and node.mesh is not None:
-            skin_users.setdefault(node.skin, n_idx)
+    skin_matrices: dict[int, np.ndarray] = {}
     for s_idx, skin in enumerate(doc.skins):
-        mats = None
+        for j in skin.joints:
+            if not 0 <= j < len(nodes):
+                raise InputError(path, f"skin {s_idx} names node {j}, which does not exist")
+            if j not in joint_nodes:
+                joint_nodes.append(j)
+        M = default[list(skin.joints)]
         if skin.inverseBindMatrices is not None:
             mats = read_accessor(doc, buffers, skin.inverseBindMatrices, path).reshape(-1, 4, 4).transpose(0, 2, 1)
             if len(mats) < len(skin.joints):
                 raise InputError(path, f"skin {s_idx} has {len(skin.joints)} joints but {len(mats)} inverse bind matrices")
-        mesh_global = default[skin_users[s_idx]] if s_idx in skin_users else np.eye(4)
-        for k, j in enumerate(skin.joints):
-            if not 0 <= j < len(nodes):
-                raise InputError(path, f"skin {s_idx} names node {j}, which does not exist")
-            if j not in ibm:
-                joint_nodes.append(j)
-                # bind global B_j = G_mesh · IBM_j^-1; with no IBMs (identity, the spec's default) the
-                # vertices are in each joint's own frame and the bind pose is the stored pose
-                ibm[j] = mesh_global @ np.linalg.inv(mats[k]) if mats is not None else default[j]
-        skin_matrices[s_idx] = (np.array([ibm[j] @ mats[k] for k, j in enumerate(skin.joints)]) if mats is not None
-                                else default[list(skin.joints)])
+            M = M @ mats[: len(skin.joints)]
+        skin_matrices[s_idx] = M
     is_joint = np.zeros(len(nodes), bool)
     is_joint[joint_nodes] = True
 
@@ -372,21 +365,12 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
             p = parents[p]
         return p
 
-    # bind globals of every node: joints from the IBMs, others follow their nearest joint ancestor
-    bind = default.copy()
-    for j in joint_nodes:
-        bind[j] = ibm[j]
-    for i in range(len(nodes)):
-        if not is_joint[i]:
-            a = joint_ancestor(parents[i]) if parents[i] >= 0 else -1
-            if a >= 0:
-                bind[i] = bind[a] @ np.linalg.inv(default[a]) @ default[i]
     column = {n: k for k, n in enumerate(joint_nodes)}
     J = len(joint_nodes)
 
     Vs, Fs, Ws, parts, names = [], [], [], [], []
     offset = 0
-    morphs = unnormalised = orphans = 0
+    morphs = unnormalised = orphans = not_numbers = 0
     max_sum = 1.0
     skipped_modes = 0
     for n_idx, node in enumerate(nodes):
@@ -415,7 +399,6 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
             W = np.zeros((len(X), J))
             skinned = skin is not None and attrs.JOINTS_0 is not None and attrs.WEIGHTS_0 is not None
             if skinned:
-                world = _apply(default[n_idx], X)
                 Wk = np.zeros((len(X), len(skin.joints)))  # over this skin's joints
                 for js, ws in (("JOINTS_0", "WEIGHTS_0"), ("JOINTS_1", "WEIGHTS_1")):
                     ja, wa = getattr(attrs, js, None), getattr(attrs, ws, None)
@@ -426,35 +409,32 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
                     if jv.size and (jv.min() < 0 or jv.max() >= len(skin.joints)):
                         raise InputError(path, f"mesh {mesh.name or node.mesh} uses joint index {int(jv.max())} "
                                          f"but its skin has {len(skin.joints)} joints")
+                    bad = ~np.isfinite(wv)
+                    if np.any(bad):
+                        not_numbers += int(np.any(bad, axis=1).sum())
+                        wv = np.where(bad, 0.0, wv)
                     np.add.at(Wk, (np.repeat(np.arange(len(X)), jv.shape[1]), jv.ravel()), np.clip(wv, 0, None).ravel())
                 total = Wk.sum(1)
-                has = total > 1e-9
-                if skin.inverseBindMatrices is None and np.any(has):
-                    # no IBMs: the vertices are in the joints' frames; skin them in the stored pose
-                    # (with IBMs every bind-pose joint matrix is G_mesh, so world = G_mesh · v above, exactly)
-                    M = skin_matrices[node.skin]
-                    posed = np.einsum("vk,kab,vb->va", Wk[has] / total[has, None], M[:, :3, :],
-                                      np.column_stack([X[has], np.ones(int(has.sum()))]))
-                    world[has] = posed
+                none = total <= 1e-9
+                if np.any(none):  # no weight: the skin's first (root) joint carries them
+                    orphans += int(none.sum())
+                    Wk[none, 0] = total[none] = 1.0
+                M = skin_matrices[node.skin]
+                world = np.einsum("vk,kab,vb->va", Wk / total[:, None], M[:, :3, :],
+                                  np.column_stack([X, np.ones(len(X))]))
                 cols = np.array([column[j] for j in skin.joints], np.int64)
                 for k in range(len(skin.joints)):
                     W[:, cols[k]] += Wk[:, k]
             else:  # rigid: follows its nearest joint ancestor
-                world = _apply(bind[n_idx], X)
+                world = _apply(default[n_idx], X)
                 a = joint_ancestor(n_idx)
                 if a < 0 and J:
                     centre = world.mean(0) if len(world) else np.zeros(3)
-                    a = joint_nodes[int(np.argmin(np.linalg.norm(bind[joint_nodes, :3, 3] - centre, axis=1)))]
+                    a = joint_nodes[int(np.argmin(np.linalg.norm(default[joint_nodes, :3, 3] - centre, axis=1)))]
                     notes.append(f"mesh '{mesh.name or node.mesh}' hangs from no joint; it follows the nearest "
                                  f"joint '{nodes[a].name or a}'")
                 W[:, column[a]] = 1.0
             sums = W.sum(1)
-            zero = sums <= 1e-9
-            if np.any(zero):  # a skinned vertex with no weight: give it to the node's joint ancestor
-                orphans += int(zero.sum())
-                a = joint_ancestor(n_idx)
-                W[zero, column[a] if a >= 0 else 0] = 1.0
-                sums = W.sum(1)
             off = np.abs(sums - 1.0) > 1e-3
             if np.any(off):
                 unnormalised += int(off.sum())
@@ -478,8 +458,11 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
                  f"{J} joints in {len(doc.skins)} skin(s)")
     if unnormalised:
         notes.append(f"skin weights of {unnormalised} vertices did not sum to 1 (up to {max_sum:.3g}); normalised")
+    if not_numbers:
+        notes.append(f"skin weights of {not_numbers} vertices were not numbers (NaN or infinite); those weights "
+                     "were dropped")
     if orphans:
-        notes.append(f"{orphans} skinned vertices had no weight; they follow their mesh's joint")
+        notes.append(f"{orphans} skinned vertices had no weight; they follow their skin's root joint")
     if morphs:
         notes.append(f"morph targets of {morphs} primitive(s) ignored (the base shape is posed)")
     if skipped_modes:
@@ -487,7 +470,7 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
     parent_joint = np.array([joint_ancestor(parents[j]) if parents[j] >= 0 else -1 for j in joint_nodes], np.int64)
     joint_parents = np.array([column[p] if p >= 0 else -1 for p in parent_joint], np.int64)
     return GltfSkin(V, np.vstack(Fs), np.concatenate(parts), names, np.vstack(Ws), np.asarray(joint_nodes, np.int64),
-                    [nodes[j].name or f"joint{k}" for k, j in enumerate(joint_nodes)], joint_parents, bind, default,
+                    [nodes[j].name or f"joint{k}" for k, j in enumerate(joint_nodes)], joint_parents, default,
                     notes)
 
 
@@ -497,7 +480,7 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
 def load_gltf_character(path, progress=None):
     """The print body, bones and skin weights of a rigged glTF/GLB asset.
 
-    Reads the skin in its bind pose (:func:`read_gltf_skin`),
+    Reads the skin in its rest pose (:func:`read_gltf_skin`),
     makes the closed print body from all its parts with the weights carried
     along (:func:`~supportless.printbody.print_body`), derives the bones from
     the joints (:func:`~supportless.joints.skeleton_from_joints`) and converts
@@ -599,8 +582,8 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
     destination : str or os.PathLike
         ``.glb`` or ``.gltf`` (a ``.gltf`` embeds its buffers).
     joint_transforms : (J, 4, 4) float64
-        World-space rigid transform (the file's units) each joint's bind
-        global is moved by: its new global is ``T_j · B_j``.
+        World-space rigid transform (the file's units) each joint's rest
+        global is moved by: its new global is ``T_j · G_j``.
     joint_nodes : (J,) int64
         The node of each joint (:attr:`GltfSkin.joint_nodes`).
     """
@@ -608,11 +591,11 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
 
     from .io import atomic_path
 
-    doc, buffers = _load_document(source)
-    skin = _skin_of(doc, buffers, source)  # read before the nodes below are changed
+    skin = _skin_of(*_load_document(source), source)
+    doc = pygltflib.GLTF2().load(str(source))  # written as it is: compressed meshes stay compressed
     parents = node_parents(doc, source)
     locals_ = np.array([node_local(n) for n in doc.nodes])
-    new_global = {int(j): np.asarray(T) @ skin.bind_globals[int(j)] for j, T in zip(joint_nodes, joint_transforms)}
+    new_global = {int(j): np.asarray(T) @ skin.rest_globals[int(j)] for j, T in zip(joint_nodes, joint_transforms)}
     G = np.full_like(locals_, np.nan)
     for i in joint_order(parents):
         p = parents[i]
@@ -647,5 +630,25 @@ def write_posed_gltf(source, destination, joint_transforms: np.ndarray, joint_no
     with atomic_path(destination) as tmp:
         if destination.suffix.lower() == ".gltf":
             doc.save_json(str(tmp))
-        else:
+        elif str(source).lower().endswith(".gltf"):
             doc.save_binary(str(tmp))
+        else:
+            Path(tmp).write_bytes(_glb_bytes(doc))
+
+
+def _glb_bytes(doc) -> bytes:
+    """A GLB of ``doc`` with its binary chunk as it is.
+
+    pygltflib's writer rebuilds the chunk from the buffer views and drops the
+    bytes only an extension points at (meshopt's compressed streams).
+    """
+    import struct
+
+    blob = doc.binary_blob() or b""
+    blob += b"\0" * (-len(blob) % 4)
+    text = doc.to_json().encode("utf-8")
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<I4s", len(text), b"JSON") + text
+    if blob:
+        chunks += struct.pack("<I4s", len(blob), b"BIN\0") + blob
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks

@@ -72,6 +72,10 @@ class RigSkeleton:
     pruned: list
 
 
+#: Sibling joints closer than this fraction of the model's size are one joint.
+SAME_PLACE = 1e-6
+
+
 def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np.ndarray, names: list,
                          vertices: np.ndarray) -> RigSkeleton:
     """Bones from a joint hierarchy and its skin weights.
@@ -84,7 +88,9 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
     when that centre is at the joint), nearly as far as that skin reaches (:data:`LEAF_REACH`). Each
     joint's weight goes to the bone that starts at it and passes nearest the
     centre of its skin; a bone that starts at a joint but carries none of its
-    weight (a hip's second child) carries no weight.
+    weight (a hip's second child) carries no weight. Sibling joints at one
+    place (a hand's palm joints, all at the wrist) are one joint: the later
+    ones' weight and children go to the first, and their nodes follow its bone.
 
     Parameters
     ----------
@@ -104,6 +110,8 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
     W = np.asarray(weights, np.float64)
     X = np.asarray(vertices, np.float64)
     nj = len(P)
+    scale = float(np.ptp(X, axis=0).max()) if len(X) else 1.0
+    parents, W, twin = _merge_coincident_siblings(P, parents, W, SAME_PLACE * scale)
     mass = W.sum(0)
     weighted = mass > WEIGHT_EPS * max(mass.sum(), 1e-300)
     children: list[list[int]] = [[] for _ in range(nj)]
@@ -128,7 +136,6 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
                     keep[j] = False
                     changed = True
     kparent = np.array([p if p >= 0 and keep[p] else -1 for p in parents], np.int64)
-    scale = float(np.ptp(X, axis=0).max()) if len(X) else 1.0
     centres = np.zeros((nj, 3))
     for j in np.flatnonzero(weighted):
         centres[j] = W[:, j] @ X / mass[j]
@@ -191,8 +198,38 @@ def skeleton_from_joints(positions: np.ndarray, parents: np.ndarray, weights: np
             driver[j] = incoming[j]
         elif parents[j] >= 0:
             driver[j] = driver[parents[j]]
-    pruned = [names[j] for j in range(nj) if not keep[j]]
+    folded = np.flatnonzero(twin >= 0)
+    driver[folded] = driver[twin[folded]]
+    pruned = [names[j] for j in range(nj) if not keep[j] and twin[j] < 0]
     return RigSkeleton(Jout, Bout, bone_names, Wb, jof, driver, pruned)
+
+
+def _merge_coincident_siblings(P, parents, W, tol):
+    """Fold each joint into an earlier sibling at the same place (within ``tol``).
+
+    Returns the parents with the folded joints' children moved to the sibling
+    and the folded joints made roots of nothing, the weights with their
+    columns added to the sibling's, and ``twin`` (J,) int64: the sibling a
+    joint was folded into, -1 for the others.
+    """
+    parents = parents.copy()
+    W = W.copy()
+    twin = np.full(len(P), -1, np.int64)
+    for j in range(len(P)):
+        p = parents[j]
+        if p < 0:
+            continue
+        same = [s for s in range(j) if parents[s] == p and twin[s] < 0 and np.linalg.norm(P[s] - P[j]) <= tol]
+        if not same:
+            continue
+        s = same[0]
+        twin[j] = s
+        W[:, s] += W[:, j]
+        W[:, j] = 0.0
+        parents[parents == j] = s
+    # the folded joints leave the tree (no weight, no children, no parent)
+    parents[twin >= 0] = -1
+    return parents, W, twin
 
 
 def joint_order(parents: np.ndarray) -> np.ndarray:

@@ -42,7 +42,7 @@ from typing import Callable
 
 import numpy as np
 
-from .energies.exact import self_intersects
+from .copyleft.cgal import self_intersects
 from .energies.slicer_model import predicted_support_mm
 from .geometry import place_on_plate, print_pose
 from .printframe import PrintFrame, rig_print_frame

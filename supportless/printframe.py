@@ -23,13 +23,18 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["DEFAULT_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
+__all__ = ["BELIEVABLE_FILE_HEIGHT_MM", "DEFAULT_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
            "rotation_to_z"]
 
 #: The printed height of a model's rest pose when the user gives none, mm: a figurine.
 DEFAULT_HEIGHT_MM = 60.0
 #: Printed heights outside this range (mm) are unusual for a figure: the tool says so.
 USUAL_HEIGHT_MM = (10.0, 300.0)
+
+#: Heights, in mm, a model whose file states its units (glTF: metres) is
+#: believed to have: outside them the file's units are probably wrong (a
+#: 79 m fox, a 3 mm person) and the user is told how to choose the size.
+BELIEVABLE_FILE_HEIGHT_MM = (1.0, 10_000.0)
 
 
 def rotation_to_z(up) -> np.ndarray:
@@ -166,7 +171,13 @@ class PrintFrame:
                 "change it, --keep-units to keep the file's size")
 
     def unusual(self) -> str | None:
-        """A warning when the printed height is far outside :data:`USUAL_HEIGHT_MM`, else None."""
+        """A warning when the printed height is far outside :data:`USUAL_HEIGHT_MM`, or the file's
+        own height (in a file that states millimetres) outside :data:`BELIEVABLE_FILE_HEIGHT_MM`; else None."""
+        if self.unit == "mm" and len(self.up) == 3 and not (
+                BELIEVABLE_FILE_HEIGHT_MM[0] <= self.model_height <= BELIEVABLE_FILE_HEIGHT_MM[1]):
+            return (f"the file says the model is {_length(self.model_height)} tall, outside "
+                    f"{_length(BELIEVABLE_FILE_HEIGHT_MM[0])}-{_length(BELIEVABLE_FILE_HEIGHT_MM[1])}: its units may "
+                    f"be wrong; it is printed {_length(self.height_mm)} tall (--height-mm H sets the printed height)")
         lo, hi = USUAL_HEIGHT_MM
         if lo <= self.height_mm <= hi or len(self.up) != 3:
             return None

@@ -19,7 +19,7 @@ from typing import Callable
 
 import numpy as np
 
-from .energies.exact import self_intersects
+from .copyleft.cgal import self_intersects
 from .profile import PrinterProfile
 from .rig import Rig
 from .search import (CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at,

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .energies.exact import intersecting_face_pairs
+from .copyleft.cgal import intersecting_face_pairs
 from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.slicer_model import predicted_support_mm

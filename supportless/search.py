@@ -18,12 +18,13 @@ from typing import Callable
 
 import numpy as np
 
-from .energies.exact import self_intersects
+from .copyleft.cgal import self_intersects
 from .geometry import place_on_plate, print_pose
 from .interrupt import deferred_interrupt, requested
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
+from .result import PoseResult, as_written, measured_at, on_full_surface
 from .rig import Rig
 from .settings import PSO_PRESETS, SearchSettings
 from .symmetry import PoseLayout, require_mirror
@@ -314,83 +315,6 @@ def _reject_infeasible(values, X, threshold, feasible, skip=0):
 # --------------------------------------------------------------------------- #
 # pose search
 # --------------------------------------------------------------------------- #
-@dataclass
-class PoseResult:
-    """Outcome of :func:`optimize`.
-
-    Attributes
-    ----------
-    angles : (m, 3) float64
-        Best pose, radians.
-    vertices : (n, d) float64
-        Posed full-resolution surface standing as the input stood (the
-        display frame), placed on the build plate (lowest point at 0 along up).
-    value : float
-        Objective of the best pose.
-    history : (iterations + 1,) float64
-        Best objective per iteration.
-    terms : dict of str -> float
-        Normalised terms of the best pose.
-    settings : SearchSettings
-        What the search was asked to do.
-    objective : Objective
-        What it minimised (for measuring poses afterwards).
-    interrupted : bool
-        True when the search stopped early (Ctrl-C or the callback).
-    fixed : (m,) bool
-        The bones that kept their rotation.
-    term_history : dict of str -> list of float
-        Normalised terms of the best pose after each iteration.
-    runtime_seconds : float
-        Wall time of the search.
-    stats : dict
-        Where the time went: ``exact_calls``/``exact_seconds`` (CGAL checks
-        of candidates for the swarm's best), ``overlap_rejections``
-        (candidates rejected without CGAL, :data:`OVERLAP_CERTAIN`) and
-        ``progress_calls``/``progress_seconds`` (terms of the best pose per
-        iteration). A search on a proxy adds ``proxy_faces``, ``proxy_value``
-        (its best value on the proxy), ``full_rescored`` (candidates measured
-        on the full surface) and ``full_exact_calls`` (CGAL checks there).
-    rotation : (d, d) float64
-        The print rotation R (the identity with ``orient="keep"``).
-    print_vertices : (n, d) float64
-        The posed surface in the print frame: ``vertices`` turned by R
-        (:func:`supportless.geometry.print_pose`), on the plate. This is
-        the mesh to slice.
-    candidates : dict
-        Other good poses the last phase of the search reached, best first:
-        ``angles`` (q, m, 3) float64, ``rotations`` (q, d, d) float64 and
-        ``values`` (q,) float64 (objective values as the search measured them, :meth:`Objective.bounded`;
-        not checked for exact self-intersection). See :func:`distinct_candidates`.
-
-    The JSON report of a result is built by its caller
-    (:func:`supportless.report.build_report`): it measures the rest pose and
-    the found pose, which the search itself does not need.
-    """
-
-    angles: np.ndarray
-    vertices: np.ndarray
-    value: float
-    history: np.ndarray
-    terms: dict
-    settings: SearchSettings
-    objective: Objective
-    interrupted: bool = False
-    fixed: np.ndarray | None = None
-    term_history: dict = field(default_factory=dict)
-    runtime_seconds: float = 0.0
-    stats: dict = field(default_factory=dict)
-    rotation: np.ndarray | None = None
-    print_vertices: np.ndarray | None = None
-    candidates: dict = field(default_factory=dict)
-
-    def __post_init__(self):
-        if self.rotation is None:
-            self.rotation = np.eye(self.vertices.shape[1])
-        if self.print_vertices is None:
-            self.print_vertices = self.vertices
-
-
 class _Timed:
     """Wraps a callable and sums its calls and wall time into ``stats``."""
 
@@ -448,8 +372,9 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         (:func:`supportless.interrupt.deferred_interrupt`).
     """
     with deferred_interrupt():
-        return _optimize(rig, settings, objective=objective, start=start, start_rotation=start_rotation,
-                         callback=callback, **changes)
+        found = _optimize(rig, settings, objective=objective, start=start, start_rotation=start_rotation,
+                          callback=callback, **changes)
+    return as_written(rig, found)
 
 
 def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Objective | None = None,
@@ -474,7 +399,7 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
         found = _optimize(coarse, settings.replace(polish=0),
                           objective=settings.objective(coarse, full.arap_data, full.volume),
                           start=start, start_rotation=start_rotation, callback=progress(0, polish))
-        chosen = _on_full_surface(rig, found, full, t0)
+        chosen = on_full_surface(rig, found, full, t0)
         if not polish or chosen.interrupted:
             return chosen
         polished = _optimize(rig, settings.replace(polish=polish), objective=full, start=chosen.angles,
@@ -633,67 +558,3 @@ def _candidates(swarm: SwarmResult, to_angles, to_rotation) -> dict:
     X, values = X[order], values[order]
     rotations = np.stack([to_rotation(x) for x in X]) if len(X) else np.zeros((0, 3, 3))
     return {"angles": to_angles(X), "rotations": rotations, "values": values}
-
-
-def measured_at(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.ndarray,
-                objective: Objective | None = None) -> PoseResult:
-    """``result`` with another pose and print rotation, measured with an objective.
-
-    Parameters
-    ----------
-    rig : Rig
-        The rig the pose is for (full resolution).
-    result : PoseResult
-        The result to take the rest from (history, settings, stats, candidates).
-    angles : (m, 3) float64
-        Relative Euler angles, radians.
-    rotation : (d, d) float64
-        Print rotation.
-    objective : Objective, optional
-        What measures the pose (default: ``result.objective``).
-
-    Returns
-    -------
-    result : PoseResult
-        With ``angles``, ``rotation``, ``vertices``, ``print_vertices``,
-        ``value``, ``terms`` and ``objective`` of the new measurement.
-    """
-    objective = result.objective if objective is None else objective
-    angles = np.asarray(angles, np.float64)
-    rotation = np.asarray(rotation, np.float64)
-    turned = not np.allclose(rotation, np.eye(rig.dim))
-    posed = place_on_plate(rig.pose(angles), rig.up)
-    value, terms, _ = objective.evaluate(angles, rotation if turned else None)
-    return dataclasses.replace(result, angles=angles, rotation=rotation, vertices=posed, value=float(value),
-                               terms={k: float(v) for k, v in terms.items()}, objective=objective,
-                               print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
-
-
-#: How many of a proxy search's candidates are checked for exact intersections on the full surface at most.
-FULL_CHECKS = 10
-
-
-def _on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
-    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface.
-
-    The proxy's best and other good poses are re-scored on the full surface; with exact intersection checks the
-    best of the first :data:`FULL_CHECKS` whose full surface is clear is taken, the rest pose last.
-    """
-    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=found.value, full_exact_calls=0)
-    A = np.concatenate([found.angles[None], found.candidates.get("angles", np.zeros((0,) + found.angles.shape))])
-    Q = np.concatenate([found.rotation[None], found.candidates.get("rotations", np.zeros((0,) + found.rotation.shape))])
-    first = np.sort(np.unique(np.hstack([A.reshape(len(A), -1), Q.reshape(len(Q), -1)]), axis=0,
-                              return_index=True)[1])  # copies of a pose once
-    A, Q = A[first], Q[first]
-    order = np.argsort(np.asarray(objective(A, Q)), kind="stable")
-    A, Q = A[order], Q[order]
-    stats["full_rescored"] = len(A)
-    angles, rotation = A[0], Q[0]
-    if found.settings.exact_intersections and rig.dim == 3:
-        for a, q in [*zip(A[:FULL_CHECKS], Q[:FULL_CHECKS]), (np.zeros_like(angles), Q[0])]:
-            stats["full_exact_calls"] += 1
-            if not self_intersects(rig.pose(a), rig.faces):
-                angles, rotation = a, q
-                break
-    measured = measured_at(rig, found, angles, rotation, objective)
-    return dataclasses.replace(measured, stats=stats, runtime_seconds=time.perf_counter() - t0)

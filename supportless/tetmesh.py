@@ -1,61 +1,36 @@
 """Volume meshes for the rig: tetrahedra in 3D, a refined triangulation in 2D.
 
-Every call to TetGen (AGPL-licensed, reached through ``igl.copyleft.tetgen``)
-and to Shewchuk's Triangle (free for non-commercial use only, reached through
-``igl.triangle``) lives in this module and nowhere else, so the licence
-questions and a possible replacement stay in one place.
+TetGen (AGPL) is reached through :mod:`supportless.copyleft.tetgen`; when it
+cannot mesh a surface (real characters' shells cut each other), fTetWild
+(``pytetwild``, MPL-2.0) meshes it within a small envelope. Both run in a
+child process, so a crash of either is a message. Every call to Shewchuk's
+Triangle (free for non-commercial use only, reached through ``igl.triangle``)
+lives in this module and nowhere else.
 """
 
 from __future__ import annotations
 
-import os
-import sys
-
 import numpy as np
 
+from .copyleft.tetgen import tetgen_surface, tetgen_with_skeleton
 from .errors import InputError
+from .isolated import NativeFailure, run_isolated
 
-__all__ = ["bone_samples", "refine_triangulation_with_points", "tetrahedralize_surface", "tetrahedralize_with_skeleton",
-           "triangulate_planar"]
+__all__ = ["FTETWILD_EDGE", "FTETWILD_ENVELOPE", "bone_samples", "ftetwild_volume", "refine_triangulation_with_points",
+           "tetrahedralize_surface", "tetrahedralize_with_skeleton", "triangulate_planar"]
 
 #: TetGen switches: p = piecewise linear complex, q2 = quality bound, Y = keep
 #: the surface unchanged (so surface vertices are the first rows), Q = quiet.
 TETGEN_FLAGS = "pq2YQ"
 
+#: fTetWild's envelope: the volume mesh's boundary stays within this fraction
+#: of the bounding-box diagonal of the surface (its default, 1e-3, takes ten
+#: times longer on a character's overlapping shells for a volume that only
+#: carries the distortion energy).
+FTETWILD_ENVELOPE = 5e-3
 
-class _quiet_scratch:
-    """Run TetGen quietly in a scratch folder.
-
-    TetGen prints to the C-level stdout and stderr even with ``Q`` when it
-    fails, and writes ``tetgen-tmpfile_skipped.*`` into the working folder: both
-    are redirected (to /dev/null, to a temporary folder removed afterwards), so
-    a failure reaches the user as one line and leaves no files behind.
-    """
-
-    def __enter__(self):
-        import tempfile
-
-        sys.stdout.flush()
-        sys.stderr.flush()
-        self._saved = [os.dup(1), os.dup(2)]
-        self._null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(self._null, 1)
-        os.dup2(self._null, 2)
-        self._cwd = os.getcwd()
-        self._tmp = tempfile.TemporaryDirectory(prefix="supportless-tetgen-")
-        os.chdir(self._tmp.name)
-        return self
-
-    def __exit__(self, *exc):
-        os.chdir(self._cwd)
-        self._tmp.cleanup()
-        sys.stdout.flush()
-        sys.stderr.flush()
-        for fd, saved in zip((1, 2), self._saved):
-            os.dup2(saved, fd)
-            os.close(saved)
-        os.close(self._null)
-        return False
+#: fTetWild's target edge length, a fraction of the bounding-box diagonal.
+FTETWILD_EDGE = 0.05
 
 
 def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray,
@@ -81,23 +56,12 @@ def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints
         The first ``n`` rows are ``vertices`` unchanged.
     tets : (k, 4) int64
     """
-    import igl
-    import igl.copyleft.tetgen  # noqa: F401  (registers the submodule)
-
     V = np.ascontiguousarray(vertices, np.float64)
-    F = np.ascontiguousarray(faces, np.int64)
-    C = np.ascontiguousarray(joints, np.float64)
-    BE = np.ascontiguousarray(bones, np.int64)
     try:
-        with _quiet_scratch():
-            TV, TT, _ = igl.copyleft.tetgen.mesh_with_skeleton(
-                V, F, C, np.zeros(0, np.int64), BE, np.zeros((0, 2), np.int64), samples_per_bone, flags
-            )
-    except RuntimeError as exc:
-        raise InputError(None, f"TetGen could not tetrahedralise the surface ({exc}); "
+        TV, TT = tetgen_with_skeleton(V, faces, joints, bones, samples_per_bone, flags)
+    except NativeFailure as exc:
+        raise InputError(None, f"{exc}: the surface could not be tetrahedralised with its skeleton inside; "
                          "check it is closed and free of self-intersections") from None
-    TV = np.asarray(TV, np.float64)
-    TT = np.asarray(TT, np.int64)
     if len(TV) < len(V) or not np.array_equal(TV[: len(V)], V):
         raise InputError(None, "TetGen changed the surface vertices; the surface may self-intersect")
     return TV, TT
@@ -114,12 +78,16 @@ def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
     cannot (points of a boolean union closer than its tolerance, nearly
     overlapping segments), its volume mesh is used as it came (or the surface
     is meshed free to split, then without quality refinement), and the surface
-    vertices are put first as vertices of no tetrahedron.
+    vertices are put first as vertices of no tetrahedron. When TetGen fails or
+    crashes on every try (shells that cut each other), fTetWild meshes the
+    surface within :data:`FTETWILD_ENVELOPE` (:func:`ftetwild_volume`), the
+    same way.
 
     Parameters
     ----------
     vertices : (n, 3) float64
-        Closed, manifold, outward-oriented surface (several solids allowed).
+        Closed, outward-oriented surface (several solids allowed; may cut
+        itself).
     faces : (f, 3) int64
     flags : str
         TetGen switches of the first try; ``Y`` must stay.
@@ -132,33 +100,87 @@ def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,
     conforming : bool
         Whether the tetrahedra have the surface's vertices and faces (the first
         try worked).
-    """
-    import igl
-    import igl.copyleft.tetgen  # noqa: F401  (registers the submodule)
 
+    Raises
+    ------
+    InputError
+        When neither TetGen nor fTetWild can mesh the surface.
+    """
     V = np.ascontiguousarray(vertices, np.float64)
     F = np.ascontiguousarray(faces, np.int64)
+    failures: list[NativeFailure] = []
 
     def run(switches):
         try:
-            with _quiet_scratch():
-                out = igl.copyleft.tetgen.tetrahedralize(V, F, flags=switches)
-        except RuntimeError:
+            return tetgen_surface(V, F, switches)
+        except NativeFailure as exc:
+            failures.append(exc)
             return None
-        TV, TT = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
-        return (TV, TT) if len(TT) else None
 
     first = run(flags)
     if first is not None and len(first[0]) >= len(V) and np.array_equal(first[0][: len(V)], V):
         return first[0], first[1], True
     # TetGen dropped or moved points (it ignores points it takes as coincident), or failed: use its
     # volume mesh as it is, else try with the surface free to split, then without quality refinement
-    free = first or run(flags.replace("Y", "")) or run("pQ")
+    # (not after a crash: the same surface crashes it again), then fTetWild
+    crashed = any(f.crashed for f in failures)
+    free = first or (None if crashed else run(flags.replace("Y", "")) or run("pQ"))
     if free is None:
-        raise InputError(None, "TetGen could not tetrahedralise the surface; check it is closed and free of "
-                         "self-intersections")
+        try:
+            free = ftetwild_volume(V, F)
+        except NativeFailure as exc:
+            raise InputError(None, f"neither TetGen ({failures[-1]}) nor fTetWild ({exc}) could tetrahedralise "
+                             "the surface; check it is closed") from None
     TV, TT = free
     return np.vstack([V, TV]), TT + len(V), False
+
+
+def ftetwild_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """fTetWild's volume mesh of a surface that may cut itself or have gaps.
+
+    The inside is decided by winding number, so overlapping shells become
+    one solid; the boundary stays within :data:`FTETWILD_ENVELOPE` of the
+    surface. Runs in a child process, on one thread: with more, fTetWild's
+    result depends on the threads' timing, and the rig (its cache, the bones
+    that carry weight) would differ from run to run.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    tet_vertices : (t, 3) float64
+        Not the surface's vertices.
+    tets : (k, 4) int64
+        Positively oriented.
+
+    Raises
+    ------
+    NativeFailure
+        When fTetWild is not installed, fails, crashes or makes nothing.
+    """
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int32)
+    return run_isolated(_ftetwild, V, F, what="fTetWild")
+
+
+def _ftetwild(V, F):
+    try:
+        import pytetwild
+    except ImportError:
+        raise RuntimeError("pytetwild is not installed (pip install 'pytetwild>=0.2.3,<0.3')") from None
+    TV, TT = pytetwild.tetrahedralize(V, F, edge_length_fac=FTETWILD_EDGE, epsilon=FTETWILD_ENVELOPE,
+                                      stop_energy=50.0, num_opt_iter=20, num_threads=1, quiet=True)
+    TV, TT = np.asarray(TV, np.float64), np.asarray(TT, np.int64)
+    if len(TT) == 0:
+        raise RuntimeError("no tetrahedra")
+    # orient every tetrahedron positively, as TetGen's are
+    a, b, c, d = (TV[TT[:, i]] for i in range(4))
+    negative = np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) < 0
+    TT[negative] = TT[negative][:, [0, 2, 1, 3]]
+    return TV, TT
 
 
 def refine_triangulation_with_points(vertices: np.ndarray, faces: np.ndarray,

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from supportless.energies.exact import intersecting_face_pairs, intersecting_faces, self_intersects
+from supportless.copyleft.cgal import intersecting_face_pairs, intersecting_faces, self_intersects
 
 from meshes import box
 

@@ -8,7 +8,7 @@ import pytest
 from click.testing import CliRunner
 
 import supportless as sl
-from supportless.energies.exact import self_intersects
+from supportless.copyleft.cgal import self_intersects
 from supportless.pareto import SAME_DEGREES, non_dominated, pareto_front, spread, sweep_factors
 from supportless.search import pose_distance_deg
 

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from supportless.energies.exact import intersecting_face_pairs
+from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.geometry import signed_volume
 from supportless.io import check_closed_surface
 from supportless.printbody import BRIDGE_GAP, ISLAND_MIN_VOLUME, SHELL_MIN_VOLUME, print_body, transfer_values

@@ -245,3 +245,18 @@ def test_slice_check_measures_the_written_file_itself(prusa_slicer, tiny_files, 
     first = next(t for t in res.stdout.splitlines() if t.startswith("support "))
     assert "PrusaSlicer" in " ".join(res.stdout.split()) and first.split(" -> ")[0] in report["support"]["line"]
     assert report["slice_check"]["height_mm"] == pytest.approx(60.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("height_mm, warned", [(79_000.0, True), (3.2, True), (0.5, True), (1_800.0, False),
+                                               (400.0, False)])
+def test_a_file_size_no_figure_has_is_one_warning_naming_height_mm(height_mm, warned):
+    """A glTF says metres: a 79 m fox or a 3 mm person means wrong units; a 1.8 m person does not."""
+    V = np.array([[0.0, 0.0, 0.0], [0.3, height_mm, 0.2], [0.1, height_mm / 2, 0.4]]) * [height_mm / 10, 1, 1]
+    frame = print_frame(V, (0.0, 1.0, 0.0), unit="mm")
+    assert frame.height_mm == DEFAULT_HEIGHT_MM
+    message = frame.unusual()
+    assert (message is not None) == warned
+    if warned:
+        assert "--height-mm" in message and "units may be wrong" in message
+    # a file of unknown units (OBJ) says nothing about its own size
+    assert print_frame(V, (0.0, 1.0, 0.0)).unusual() is None

@@ -51,7 +51,7 @@ def test_slice_rank_picks_the_cheapest_distinct_pose(branch_rig, searched):
     np.testing.assert_allclose(calls[0]["meshes"][ranked.chosen][0], chosen.print_vertices)
     assert ranked.entries[ranked.chosen]["value"] == pytest.approx(chosen.value)
     # the poses are distinct and none self-intersects
-    from supportless.energies.exact import self_intersects
+    from supportless.copyleft.cgal import self_intersects
     from supportless.search import DISTINCT_DEGREES
     for e in ranked.entries[1:]:
         assert e["distance_deg"] >= DISTINCT_DEGREES

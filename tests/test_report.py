@@ -7,7 +7,7 @@ import pytest
 
 import supportless as sl
 from supportless import report as report_mod
-from supportless.energies.exact import intersecting_face_pairs
+from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.report import build_report, pose_measures, reduction, write_pictures
 from supportless.settings import SearchSettings
 

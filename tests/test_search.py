@@ -128,7 +128,7 @@ def test_optimize_reduces_support_of_the_cantilever(branch_rig):
 
 def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
     """With the ray-grid penalty off, the search would bend the arm into the body; the exact gate stops it."""
-    from supportless.energies.exact import intersecting_face_pairs
+    from supportless.copyleft.cgal import intersecting_face_pairs
 
     rig = branch_rig
     settings = SearchSettings(particles=24, iterations=10, seed=0, w_intersect=0.0,
@@ -364,7 +364,7 @@ def test_evolution_strategy_never_worse_than_its_initial_positions_and_stops_on_
 
 
 def test_optimize_with_cma_is_never_worse_than_rest_and_has_no_intersection(branch_rig):
-    from supportless.energies.exact import intersecting_face_pairs
+    from supportless.copyleft.cgal import intersecting_face_pairs
 
     rig = branch_rig
     res = sl.optimize(rig, particles=40, iterations=8, seed=0, optimizer="cma")
@@ -509,7 +509,7 @@ def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
     assert polished.value < plain.value  # a short swarm leaves room that small steps find
     np.testing.assert_array_equal(polished.history[:len(plain.history)], plain.history)  # the same swarm first
     assert len(polished.history) == len(plain.history) + 5 and np.all(np.diff(polished.history) <= 0)
-    assert not sl.energies.exact.self_intersects(branch_rig.pose(polished.angles), branch_rig.faces)
+    assert not sl.copyleft.cgal.self_intersects(branch_rig.pose(polished.angles), branch_rig.faces)
     with pytest.raises(sl.errors.InputError):
         SearchSettings(polish=-1)
 
@@ -526,4 +526,4 @@ def test_only_poses_that_could_become_the_swarms_best_are_measured_for_self_inte
     evaluations = 30 * 11 + 15 * 11  # the pose phase, then half the swarm turning
     assert 0 < sum(measured) - progress < 0.2 * evaluations
     assert float(result.objective(result.angles, result.rotation)) == pytest.approx(result.value, rel=1e-12)
-    assert not sl.energies.exact.self_intersects(branch_rig.pose(result.angles), branch_rig.faces)
+    assert not sl.copyleft.cgal.self_intersects(branch_rig.pose(result.angles), branch_rig.faces)

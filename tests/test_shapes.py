@@ -10,7 +10,7 @@ from scipy.sparse.csgraph import connected_components
 
 import supportless as sl
 from supportless import shapes
-from supportless.energies.exact import intersecting_face_pairs
+from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.geometry import signed_volume
 from supportless.io import edge_counts
 from supportless.kinematics import bone_parents, topological_order

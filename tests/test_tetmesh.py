@@ -1,4 +1,4 @@
-"""TetGen calls (:mod:`supportless.tetmesh`): a failure is one error, with nothing printed or left behind."""
+"""Volume meshes (:mod:`supportless.tetmesh`): a failure is one error, with nothing printed or left behind; fTetWild takes surfaces TetGen cannot."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 
 from meshes import box
 from supportless.errors import InputError
-from supportless.tetmesh import tetrahedralize_surface, tetrahedralize_with_skeleton
+from supportless.tetmesh import ftetwild_volume, tetrahedralize_surface, tetrahedralize_with_skeleton
 
 
 def crossing_boxes():
@@ -21,7 +21,7 @@ def test_a_failing_tetgen_says_one_line_and_leaves_no_files(tmp_path, monkeypatc
     monkeypatch.chdir(tmp_path)
     V, F = crossing_boxes()
     J = np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]])
-    with pytest.raises(InputError, match="TetGen could not"):
+    with pytest.raises(InputError, match="TetGen failed.*could not be tetrahedralised"):
         tetrahedralize_with_skeleton(V, F, J, np.array([[0, 1]]))
     out, err = capfd.readouterr()
     assert out == "" and err == ""
@@ -38,3 +38,29 @@ def test_a_closed_surface_is_meshed_keeping_its_vertices_first(tmp_path, monkeyp
     volume = np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))).sum() / 6
     np.testing.assert_allclose(volume, 2.0)
     assert list(tmp_path.iterdir()) == []
+
+
+def tet_volumes(TV, TT):
+    a, b, c, d = (TV[TT[:, i]] for i in range(4))
+    return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6
+
+
+def test_ftetwild_meshes_crossing_shells_as_their_union(tmp_path, monkeypatch):
+    """Box 2x1x1 and box 1x2x0.5 crossing it: the union's volume is 2 + 1 - 0.5 = 2.5."""
+    monkeypatch.chdir(tmp_path)
+    TV, TT = ftetwild_volume(*crossing_boxes())
+    vol = tet_volumes(TV, TT)
+    assert np.all(vol > 0)
+    np.testing.assert_allclose(vol.sum(), 2.5, rtol=0.03)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_surface_that_cuts_itself_still_gets_a_volume_mesh_with_its_vertices_first():
+    V, F = crossing_boxes()
+    TV, TT, conforming = tetrahedralize_surface(V, F)
+    assert not conforming
+    np.testing.assert_array_equal(TV[: len(V)], V)
+    assert TT.min() >= len(V)  # the surface's vertices are in no tetrahedron
+    vol = tet_volumes(TV, TT)
+    assert np.all(vol > 0)
+    np.testing.assert_allclose(vol.sum(), 2.5, rtol=0.03)

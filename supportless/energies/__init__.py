@@ -8,6 +8,5 @@
 * :mod:`.surface`: what they share: argument checks (:func:`.surface.prepare`,
   ``up`` as ``"-z"`` or a vector), orientation, 2D boundary edges, the frame of ``up``;
 * :mod:`.arap`: as-rigid-as-possible deformation energy;
-* :mod:`.exact`: exact self-intersection test (CGAL);
 * :mod:`.balance`: new plate contacts and balance.
 """

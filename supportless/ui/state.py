@@ -48,7 +48,7 @@ import numpy as np
 
 from .. import io as sio
 from .. import posefile
-from ..energies.exact import intersecting_faces
+from ..copyleft.cgal import intersecting_faces
 from ..errors import InputError
 from ..energies.overhang import risky_faces
 from ..geometry import place_on_plate, print_pose, print_transform

@@ -1,17 +1,18 @@
-"""Exact self-intersection test of a triangle surface (CGAL through libigl).
+"""Exact self-intersection of a triangle surface, and its removal (CGAL through libigl).
 
 The ray-grid estimate (:mod:`supportless.energies.intersection`) steers the
 search away from overlaps but cannot see overlaps thinner than a grid cell.
-This module answers exactly which triangle pairs intersect. It is the only
-place in the package that calls ``igl.copyleft.cgal`` (GPL-licensed CGAL code
-inside libigl's wheel).
+This module answers exactly which triangle pairs intersect, and resolves them
+on a print body whose shells cut each other (:func:`self_union`). It is the
+only place in the package that calls ``igl.copyleft.cgal`` (GPL-licensed CGAL
+code inside libigl's wheel).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["intersecting_faces", "intersecting_face_pairs", "self_intersects"]
+__all__ = ["intersecting_faces", "intersecting_face_pairs", "self_intersects", "self_union"]
 
 
 def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -88,3 +89,45 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
     out = igl.copyleft.cgal.remesh_self_intersections(V, np.ascontiguousarray(faces, np.int64), detect_only=True,
                                                        first_only=first_only)
     return np.asarray(out[2], np.int64).reshape(-1, 2)
+
+
+def self_union(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The outer surface of a surface that cuts itself: its union with nothing, by exact arithmetic.
+
+    CGAL splits every triangle along the curves where others cross it and
+    keeps the pieces on the outside (winding number > 0), rounding the new
+    vertices to doubles at the end. Runs in a child process
+    (:func:`supportless.isolated.run_isolated`): a crash inside CGAL is an
+    error, not the end of the program.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+        Outward-oriented; may intersect itself.
+
+    Returns
+    -------
+    vertices : (n', 3) float64
+    faces : (f', 3) int64
+        May hold zero-area triangles where the cut curves meet edges
+        (:func:`supportless.printbody.print_body` collapses them).
+
+    Raises
+    ------
+    supportless.isolated.NativeFailure
+        When CGAL fails or crashes.
+    """
+    from ..isolated import run_isolated
+
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int64)
+    return run_isolated(_union_with_nothing, V, F, what="CGAL's self-union")
+
+
+def _union_with_nothing(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    import igl
+    import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
+
+    out = igl.copyleft.cgal.mesh_boolean(V, F, np.zeros((0, 3)), np.zeros((0, 3), np.int64), "union")
+    return np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)

@@ -1,0 +1,66 @@
+"""Native calls in a child process (:mod:`supportless.isolated`): a crash is an error, not the end."""
+
+from __future__ import annotations
+
+import os
+import signal
+
+import numpy as np
+import pytest
+
+from supportless.isolated import NativeFailure, run_isolated
+
+
+def _double(a):
+    return a * 2
+
+
+def _raise(message):
+    raise RuntimeError(message)
+
+
+def _segfault():
+    print("noise on stdout")
+    os.kill(os.getpid(), signal.SIGSEGV)
+
+
+def _exit_quietly():
+    os._exit(3)
+
+
+def _write_a_file(name):
+    with open(name, "w") as f:
+        f.write("scratch")
+    return os.path.exists(name)
+
+
+def test_the_value_comes_back_through_the_pipe():
+    a = np.random.default_rng(0).normal(size=(1000, 3))
+    np.testing.assert_array_equal(run_isolated(_double, a), a * 2)
+
+
+def test_an_exception_in_the_child_is_one_failure_naming_the_call():
+    with pytest.raises(NativeFailure, match="TetGen failed: bad surface") as info:
+        run_isolated(_raise, "bad surface", what="TetGen")
+    assert not info.value.crashed
+
+
+def test_a_crash_is_a_failure_and_the_parent_goes_on(capfd):
+    with pytest.raises(NativeFailure, match=r"CGAL crashed \(SIGSEGV\)") as info:
+        run_isolated(_segfault, what="CGAL")
+    assert info.value.crashed
+    out, err = capfd.readouterr()
+    assert "noise" not in out and err == ""
+    assert run_isolated(_double, 2) == 4
+
+
+def test_an_exit_without_a_result_is_a_failure():
+    with pytest.raises(NativeFailure, match="exited with status 3") as info:
+        run_isolated(_exit_quietly, what="fTetWild")
+    assert info.value.crashed
+
+
+def test_files_the_child_writes_stay_in_its_scratch_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert run_isolated(_write_a_file, "tetgen-tmpfile_skipped.node")
+    assert list(tmp_path.iterdir()) == []
