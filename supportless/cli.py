@@ -90,6 +90,15 @@ def _run_front(rig, console, settings, count, method, quiet=False):
     return front
 
 
+def _standing_word(before: dict, after: dict) -> str:
+    """How the found pose stands, said against the rest pose."""
+    if after["stands"]:
+        return "stands"
+    if not before["stands"] and after.get("as_steady_as_rest"):
+        return "does not stand, nor does the rest pose (no worse)"
+    return "FALLS OVER" if after["stability_margin"] < 0 else "touches the plate anew"
+
+
 def _summary_table(report: dict, verbose: bool = False):
     """The rest pose against the found pose; the support estimates only when ``verbose``.
 
@@ -137,7 +146,7 @@ def _summary_table(report: dict, verbose: bool = False):
                   pairs(a.get("intersecting_face_pairs")), "")
     table.add_row("new contacts with the plate", str(b["new_contact_vertices"]), str(a["new_contact_vertices"]), "")
     table.add_row("stability margin (of the height)", f"{100 * b['stability_margin']:.1f} %",
-                  f"{100 * a['stability_margin']:.1f} %", "stands" if a["stands"] else "FALLS OVER")
+                  f"{100 * a['stability_margin']:.1f} %", _standing_word(b, a))
     table.add_row("largest joint rotation", "0°", f"{report['largest_rotation_deg']:.0f}°", "")
     rot = report.get("print_rotation")
     if rot and rot["angle_deg"] >= 0.5:  # a turn that shows in whole degrees

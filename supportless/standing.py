@@ -135,11 +135,16 @@ class Standing:
         -------
         measures : dict
             ``new_contact_vertices`` (int), ``stability_margin`` (fraction of
-            the height; negative: falls over), ``stands`` (bool, by the rule
-            above) and ``centre_of_mass`` (list of d floats, rest frame).
+            the height; negative: falls over), ``stands`` (bool: no new
+            contact and the centre of mass inside the support polygon by the
+            margin the rule above asks, never by a negative one),
+            ``as_steady_as_rest`` (bool: the rule above, which a pose of a
+            rest pose that does not stand can meet without standing) and
+            ``centre_of_mass`` (list of d floats, rest frame).
         """
         margin = float(self.margin(transforms))
         new = int(self.new_contacts(vertices))
+        steady = bool(new == 0 and margin >= self.required_margin - 1e-12 * self.height)
         return {"new_contact_vertices": new, "stability_margin": margin / self.height,
-                "stands": bool(new == 0 and margin >= self.required_margin - 1e-12 * self.height),
+                "stands": steady and margin > 0, "as_steady_as_rest": steady,
                 "centre_of_mass": [float(x) for x in self.centre_of_mass(transforms)]}

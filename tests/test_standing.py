@@ -86,3 +86,23 @@ def test_found_poses_stand_and_touch_nothing_new(tpose_rig):
     result = sl.optimize(tpose_rig, particles=30, iterations=10, seed=0)
     m = result.objective.standing.measures(tpose_rig.transforms(result.angles), tpose_rig.pose(result.angles))
     assert m["stands"] and m["new_contact_vertices"] == 0
+
+
+def test_a_pose_never_stands_with_a_negative_margin_even_when_rest_falls_over(tpose_rig):
+    """A rest pose tipped past its feet: poses as steady as it are allowed, but none is said to stand."""
+    rig = tpose_rig
+    obj = sl.Objective(rig)
+    tipped = obj.standing
+    tipped.__dict__["rest_margin"] = -0.1 * tipped.height  # as if the rest pose leaned out of its feet
+    tipped.__dict__.pop("required_margin", None)
+    A = rig.rest_angles()[None].repeat(2, 0)
+    A[1, 0] = np.radians([-60.0, 0.0, 0.0])  # the spine bent far forward: the centre of mass past the toes
+    transforms = rig.transforms(A)
+    upright, bent = (tipped.measures(transforms[k], rig.pose(A[k])) for k in range(2))
+    assert upright["stands"] and upright["stability_margin"] > 0
+    assert bent["stability_margin"] < 0 and bent["as_steady_as_rest"] and not bent["stands"]
+    from supportless.cli import _standing_word
+
+    falls = {"stands": False, "stability_margin": -0.05, "as_steady_as_rest": True}
+    assert "nor does the rest pose" in _standing_word({"stands": False}, falls)
+    assert _standing_word({"stands": True}, falls | {"as_steady_as_rest": False}) == "FALLS OVER"
