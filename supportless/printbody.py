@@ -356,12 +356,15 @@ def _touches_itself(V, F) -> bool:
 
 
 def _winding_surface(V, F, cells: int):
-    """The surface where the generalized winding number of (V, F) is 1/2, by marching cubes.
+    """The outer surface of (V, F) remade by marching cubes: inside by winding number, placed by distance.
 
     Inside is where the shells wind around a point at least half a turn
     (libigl's fast winding number), so overlapping and crossing shells are
-    one solid; marching cubes on a grid of ``cells`` along the longest side
-    makes a closed, manifold surface that cannot cross itself. Deterministic.
+    one solid; the field marching cubes meets is that sign times the
+    distance to the surface (computed at the grid points next to a change of
+    sign: the others only need their sign), so the surface is as smooth as
+    the input, not a staircase of cells. On a grid of ``cells`` along the
+    longest side; closed, manifold, never crossing itself. Deterministic.
 
     Returns vertices (k, 3) float64 and outward faces (g, 3) int64.
     """
@@ -370,15 +373,34 @@ def _winding_surface(V, F, cells: int):
     lo, hi = V.min(0), V.max(0)
     h = float((hi - lo).max()) / cells
     lo, hi = lo - 2 * h, hi + 2 * h
-    dims = np.ceil((hi - lo) / h).astype(np.int64) + 1
-    axes = [lo[i] + h * np.arange(dims[i]) for i in range(3)]
+    nx, ny, nz = (np.ceil((hi - lo) / h).astype(np.int64) + 1).tolist()
+    axes = [lo[i] + h * np.arange(n) for i, n in enumerate((nx, ny, nz))]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)  # x fastest
-    w = igl.fast_winding_number(V, F, np.ascontiguousarray(grid))
-    out = igl.marching_cubes(np.ascontiguousarray(w - 0.5), grid, int(dims[0]), int(dims[1]), int(dims[2]), 0.0)
+    inside = (igl.fast_winding_number(V, F, np.ascontiguousarray(grid)) > 0.5).reshape(nz, ny, nx)
+    near = np.zeros_like(inside)
+    for axis in range(3):  # grid points with a neighbour across the surface
+        change = np.diff(inside, axis=axis)
+        lower = [slice(None)] * 3
+        upper = [slice(None)] * 3
+        lower[axis], upper[axis] = slice(0, -1), slice(1, None)
+        near[tuple(lower)] |= change
+        near[tuple(upper)] |= change
+    field = np.full(inside.shape, 2.0 * h)
+    d2 = igl.point_mesh_squared_distance(np.ascontiguousarray(grid[near.ravel()]), V, F)[0]
+    field[near] = np.minimum(np.sqrt(d2), 2.0 * h)
+    field = np.where(inside, -field, field).ravel()
+    out = igl.marching_cubes(np.ascontiguousarray(field), grid, nx, ny, nz, 0.0)
     Vs, Fs = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
     if len(Fs) and _volume(Vs, Fs) < 0:
         Fs = Fs[:, ::-1]
-    return Vs, Fs
+    # pockets the winding number left inside (closed voids) and crumbs go: a print body is solid
+    comp = _components(Fs, len(Vs))
+    vols = np.array([_volume(Vs, Fs[comp == c]) for c in range(comp.max() + 1)]) if len(Fs) else np.zeros(0)
+    Fs = Fs[vols[comp] >= ISLAND_MIN_VOLUME * vols[vols > 0].sum()] if len(Fs) else Fs
+    used = np.unique(Fs)
+    remap = np.full(len(Vs), -1, np.int64)
+    remap[used] = np.arange(len(used))
+    return Vs[used], remap[Fs]
 
 
 def _is_closed(F: np.ndarray) -> bool:

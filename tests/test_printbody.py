@@ -165,3 +165,40 @@ def test_transfer_values_reproduces_a_linear_function_on_and_near_a_surface():
     np.testing.assert_allclose(transfer_values(on, V, F, values), linear(on), rtol=0, atol=1e-9)
     np.testing.assert_allclose(transfer_values(near, V, F, values), linear(on), rtol=0, atol=1e-9)
     np.testing.assert_allclose(transfer_values(V, V, F, values), values, rtol=0, atol=1e-9)
+
+
+def crossing_boxes():
+    """A 2x1x1 box and a 1x2x0.5 box through it, as one surface: their union's volume is 2 + 1 - 0.5 = 2.5."""
+    V1, F1 = box((0, 0, 0), (2, 1, 1))
+    V2, F2 = box((0.5, -0.5, 0.25), (1.5, 1.5, 0.75))
+    return np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
+
+
+def test_the_winding_number_surface_of_crossing_shells_is_their_union_closed_and_clean():
+    from supportless.printbody import WINDING_CELLS, _winding_surface
+
+    V, F = crossing_boxes()
+    assert intersecting_face_pairs(V, F) > 0
+    Vs, Fs = _winding_surface(V, F, WINDING_CELLS)
+    check_closed_surface(Vs, Fs)
+    assert intersecting_face_pairs(Vs, Fs) == 0
+    # placed by distance, not by cells: the flat faces stay where they were (to float noise), the volume too
+    np.testing.assert_allclose(Vs.min(0), V.min(0), atol=1e-3 * 2.5)
+    np.testing.assert_allclose(Vs.max(0), V.max(0), atol=1e-3 * 2.5)
+    np.testing.assert_allclose(signed_volume(Vs, Fs), 2.5, rtol=0.01)
+    again = _winding_surface(V, F, WINDING_CELLS)
+    np.testing.assert_array_equal(again[0], Vs)  # deterministic
+
+
+def test_crossing_triangles_left_by_the_union_are_resolved_with_the_values_carried():
+    from supportless.printbody import SIMPLIFY_TOLERANCE, _resolve_crossings
+
+    V, F = crossing_boxes()
+    values = np.column_stack([V[:, 0] / 2, 1 - V[:, 0] / 2])  # linear in x: carried exactly by closest point
+    log = []
+    Vx, Fx, Wx, left = _resolve_crossings(V, F, values, SIMPLIFY_TOLERANCE * 2.5, log)
+    assert left == 0 and intersecting_face_pairs(Vx, Fx) == 0
+    check_closed_surface(Vx, Fx)
+    np.testing.assert_allclose(signed_volume(Vx, Fx), 2.5, rtol=0.01)
+    np.testing.assert_allclose(Wx[:, 0], np.clip(Vx[:, 0] / 2, 0, 1), atol=0.01)
+    assert len(log) == 1 and "crossing triangles" in log[0]
