@@ -300,13 +300,13 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
     lost = Wu.sum(1) < 0.5  # bridge vertices carry no values: take them from the nearest input surface
     if np.any(lost):
         Wu[lost] = transfer_values(Vu[lost], V, F, values)
-    Vu, Fu, Wu, crossing = _resolve_crossings(Vu, Fu, Wu, SIMPLIFY_TOLERANCE * size, log)
     union_volume = _volume(Vu, Fu)
     log.append(f"union of {len(keep)} shells: {islands} solid(s), volume {union_volume:.4g} "
                f"({(union_volume / closed_volume - 1) * 100:+.1f} % against the closed shells, overlaps removed)"
                + (f"; bridged {bridged} gap(s) under {BRIDGE_GAP:.0%} of the size" if bridged else "")
                + (f"; dropped {int(small.sum())} floating piece(s) under {ISLAND_MIN_VOLUME:.0%} of the volume "
                   f"({vols[small].sum() / vols.sum():.2%})" if np.any(small) else ""))
+    Vu, Fu, Wu, _ = _resolve_crossings(Vu, Fu, Wu, SIMPLIFY_TOLERANCE * size, log)
     if islands > 1:
         log.append(f"warning: the print body is {islands} separate solids; they print as separate pieces")
     return PrintBody(Vu, Fu, Wu, islands, log)
