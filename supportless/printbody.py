@@ -226,6 +226,7 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
     welded = degenerate = duplicate = 0
     loops_filled = shells_closed = 0
     dropped: list[str] = []
+    remade: list[str] = []
     for p in np.unique(part):
         Fp = F[part == p]
         used = np.unique(Fp)
@@ -256,26 +257,33 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
                                      tri_verts=np.ascontiguousarray(Fc, np.uint64))
             solid = manifold3d.Manifold(mesh)
             if solid.status() != manifold3d.Error.NoError or solid.is_empty():
-                dropped.append(f"{name} (not manifold after closing)")
-                continue
-            shells.append((name, solid, abs(vol)))
+                # closing cannot make it manifold (edges of three faces, folds): the winding number takes it below
+                solid = None
+                remade.append(name)
+            shells.append((name, solid, abs(vol), (Vc, Fc, Wc)))
     log.append(f"welded {welded} seam-split vertices; dropped {degenerate} degenerate and {duplicate} duplicate "
                f"triangles")
     if not shells:
         raise InputError(None, "no part of the model can be closed into a solid; "
                          "export it as one closed mesh (or fix its open shells) and try again")
-    total = sum(v for _, _, v in shells)
-    keep = [(n, s, v) for n, s, v in shells if v >= SHELL_MIN_VOLUME * total]
-    dropped += [f"{n} (encloses {v / total:.1e} of the volume)" for n, s, v in shells if v < SHELL_MIN_VOLUME * total]
-    closed_volume = sum(v for _, _, v in keep)
+    total = sum(v for _, _, v, _ in shells)
+    keep = [(n, s, v, g) for n, s, v, g in shells if v >= SHELL_MIN_VOLUME * total]
+    dropped += [f"{n} (encloses {v / total:.1e} of the volume)" for n, s, v, g in shells
+                if v < SHELL_MIN_VOLUME * total]
+    remade = [n for n, s, _, _ in keep if s is None]
+    closed_volume = sum(v for _, _, v, _ in keep)
     log.append(f"{len(shells) + len([d for d in dropped if 'not manifold' in d])} shells: closed {loops_filled} "
                f"holes in {shells_closed} open shells; {len(keep)} kept"
+               + (f", {len(remade)} of them not manifold after closing ({_grouped(remade)})" if remade else "")
                + (f", dropped {len(dropped)}: " + _grouped(dropped) if dropped else "")
                + f" (volume of the closed shells {closed_volume:.4g}, input units³)")
 
     # 4: the union of all shells
-    union = manifold3d.Manifold.batch_boolean([s for _, s, _ in keep], manifold3d.OpType.Add) if len(keep) > 1 \
-        else keep[0][1]
+    if remade:  # the union of everything by winding number: one surface, closed and clean, whatever the shells
+        union = _winding_union([g for _, _, _, g in keep], log)
+    else:
+        union = manifold3d.Manifold.batch_boolean([s for _, s, _, _ in keep], manifold3d.OpType.Add) \
+            if len(keep) > 1 else keep[0][1]
     union, bridged = _bridge(union, BRIDGE_GAP * size)
     parts = union.decompose()
     vols = np.array([q.volume() for q in parts])
@@ -350,6 +358,32 @@ def _resolve_crossings(V, F, values, tol, log):
     return Vx, Fx, transfer_values(Vx, V, F, values), after
 
 
+def _winding_union(pieces, log):
+    """The union of shells (some not manifold) as one winding-number surface, a manifold3d solid carrying values."""
+    offsets = np.cumsum([0] + [len(V) for V, _, _ in pieces])
+    V = np.vstack([V for V, _, _ in pieces])
+    F = np.vstack([F + o for (_, F, _), o in zip(pieces, offsets)])
+    W = np.vstack([W for _, _, W in pieces])
+    Vw, Fw = _winding_surface(V, F, WINDING_CELLS)
+    solid = _manifold(Vw, Fw, transfer_values(Vw, V, F, W))
+    if solid is None:
+        raise InputError(None, "no part of the model can be closed into a solid; "
+                         "export it as one closed mesh (or fix its open shells) and try again")
+    log.append(f"shells that closing cannot make manifold: the union of all {len(pieces)} made as the surface of "
+               f"their winding number on a {WINDING_CELLS}-cell grid ({len(F)} -> {len(Fw)} triangles)")
+    return solid
+
+
+def _manifold(V, F, values):
+    """A manifold3d solid of (V, F) carrying ``values`` (n, k), or None when it is not manifold."""
+    import manifold3d
+
+    solid = manifold3d.Manifold(manifold3d.Mesh64(
+        vert_properties=np.ascontiguousarray(np.hstack([V, values]), np.float64),
+        tri_verts=np.ascontiguousarray(F, np.uint64)))
+    return None if solid.status() != manifold3d.Error.NoError or solid.is_empty() else solid
+
+
 def _touches_itself(V, F) -> bool:
     """Whether triangles cross, as given or rescaled (points a union leaves exactly on a face cross once rounded)."""
     return any(len(intersecting_faces(V * k, F)) for k in (1.0, 1000.0 / np.sqrt(2.0), 1.0 / np.pi))
@@ -388,6 +422,8 @@ def _winding_surface(V, F, cells: int):
     field = np.full(inside.shape, 2.0 * h)
     d2 = igl.point_mesh_squared_distance(np.ascontiguousarray(grid[near.ravel()]), V, F)[0]
     field[near] = np.minimum(np.sqrt(d2), 2.0 * h)
+    # no grid point exactly on the surface: marching cubes would put a vertex on it, shared by needle triangles
+    field = np.maximum(field, 1e-2 * h)
     field = np.where(inside, -field, field).ravel()
     out = igl.marching_cubes(np.ascontiguousarray(field), grid, nx, ny, nz, 0.0)
     Vs, Fs = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)

@@ -202,3 +202,20 @@ def test_crossing_triangles_left_by_the_union_are_resolved_with_the_values_carri
     np.testing.assert_allclose(signed_volume(Vx, Fx), 2.5, rtol=0.01)
     np.testing.assert_allclose(Wx[:, 0], np.clip(Vx[:, 0] / 2, 0, 1), atol=0.01)
     assert len(log) == 1 and "crossing triangles" in log[0]
+
+
+def test_a_shell_closing_cannot_make_manifold_is_kept_through_its_winding_number():
+    """A box with a wall inside on its diagonal (two edges of three triangles) and a box through it: kept, not dropped."""
+    V, F, part = boxes(((0, 0, 0), (2, 1, 1)), ((1.5, 0.2, 0.2), (3, 0.8, 0.8)))
+    at = {tuple(v): i for i, v in enumerate(V[:8])}
+    a, b, c, d = at[(0, 0, 0)], at[(0, 0, 1)], at[(2, 1, 0)], at[(2, 1, 1)]
+    F = np.vstack([F, [[a, b, d], [a, d, c]]])
+    part = np.concatenate([part, [0, 0]])
+    body = print_body(V, F, part, linear(V))
+    check_closed_surface(body.vertices, body.faces)
+    assert intersecting_face_pairs(body.vertices, body.faces) == 0
+    union = 2.0 + 1.5 * 0.6 * 0.6 - 0.5 * 0.6 * 0.6  # the boxes overlap over 0.5 x 0.6 x 0.6
+    np.testing.assert_allclose(signed_volume(body.vertices, body.faces), union, rtol=0.03)
+    assert any("not manifold after closing" in line for line in body.log), body.log
+    assert any("winding number" in line for line in body.log), body.log
+    np.testing.assert_allclose(body.values, linear(body.vertices), atol=0.05 * np.abs(GRADIENT).max())
