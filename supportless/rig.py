@@ -37,7 +37,7 @@ from .weights import BBW_ITERATIONS, check_weights, compute_weights
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
 
 #: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 6
+CACHE_VERSION = 7
 
 #: A surface with more triangles than this is simplified (quadric edge
 #: collapse, no new self-intersections) to :data:`PROXY_TARGET` triangles for
