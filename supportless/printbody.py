@@ -57,6 +57,10 @@ WELD_TOLERANCE = 1e-6
 #: is 0.4 mm on a 60 mm print).
 WINDING_CELLS = 160
 
+#: The winding-number surface is simplified to at most this many triangles
+#: (when the simplified one is closed and free of crossings).
+WINDING_MAX_FACES = 40_000
+
 #: After the union, edges shorter than this fraction of the size are collapsed:
 #: the needle and zero-area triangles a boolean leaves, which TetGen cannot mesh.
 SIMPLIFY_TOLERANCE = 1e-5
@@ -436,7 +440,12 @@ def _winding_surface(V, F, cells: int):
     used = np.unique(Fs)
     remap = np.full(len(Vs), -1, np.int64)
     remap[used] = np.arange(len(used))
-    return Vs[used], remap[Fs]
+    Vs, Fs = Vs[used], remap[Fs]
+    if len(Fs) > WINDING_MAX_FACES:  # cells smaller than the details of a low-poly body: fewer, larger triangles
+        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES)
+        if simpler is not None and not _touches_itself(*simpler):
+            Vs, Fs = simpler
+    return Vs, Fs
 
 
 def _is_closed(F: np.ndarray) -> bool:
