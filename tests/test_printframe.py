@@ -247,10 +247,10 @@ def test_slice_check_measures_the_written_file_itself(prusa_slicer, tiny_files, 
     assert report["slice_check"]["height_mm"] == pytest.approx(60.0, abs=1e-3)
 
 
-@pytest.mark.parametrize("height_mm, warned", [(79_000.0, True), (3.2, True), (0.5, True), (1_800.0, False),
-                                               (400.0, False)])
+@pytest.mark.parametrize("height_mm, warned", [(79_000.0, True), (12_000.0, True), (0.5, True), (3.2, False),
+                                               (1_800.0, False), (400.0, False)])
 def test_a_file_size_no_figure_has_is_one_warning_naming_height_mm(height_mm, warned):
-    """A glTF says metres: a 79 m fox or a 3 mm person means wrong units; a 1.8 m person does not."""
+    """A glTF says metres: a 79 m fox or a 0.5 mm person means wrong units; 3.2 mm to 1.8 m are believed."""
     V = np.array([[0.0, 0.0, 0.0], [0.3, height_mm, 0.2], [0.1, height_mm / 2, 0.4]]) * [height_mm / 10, 1, 1]
     frame = print_frame(V, (0.0, 1.0, 0.0), unit="mm")
     assert frame.height_mm == DEFAULT_HEIGHT_MM

@@ -10,6 +10,7 @@ import pytest
 import supportless as sl
 from supportless import kinematics as kin
 from supportless import rig as rig_mod
+from supportless import result as result_mod
 from supportless import search as search_mod
 from supportless.errors import InputError
 from supportless.io import write_dmat, write_tet_mesh
@@ -453,7 +454,7 @@ def test_the_proxy_and_the_full_surface_agree_within_the_stated_bound(dense_bran
 
 def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_clear_one(dense_branch, monkeypatch):
     rig, _ = dense_branch
-    real = search_mod.self_intersects
+    real = result_mod.self_intersects
     seen = []
 
     def full_surface(touching):  # the exact check: on the full surface, True for the first ``touching`` calls
@@ -464,12 +465,13 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
             return len(seen) <= touching
         return check
 
-    monkeypatch.setattr(search_mod, "self_intersects", full_surface(0))
+    monkeypatch.setattr(result_mod, "self_intersects", full_surface(0))  # the full-surface check lives in result
+    monkeypatch.setattr(search_mod, "as_written", lambda rig, found: found)  # the real last gate would see the fake
     clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)  # the choice, before any polish
     assert clear.stats["full_exact_calls"] == 1
     np.testing.assert_allclose(seen[0], rig.pose(clear.angles))  # the proxy's answer, checked on the full surface
     seen.clear()
-    monkeypatch.setattr(search_mod, "self_intersects", full_surface(1))
+    monkeypatch.setattr(result_mod, "self_intersects", full_surface(1))
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
     assert result.stats["full_exact_calls"] == 2
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
