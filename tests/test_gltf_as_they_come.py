@@ -1,4 +1,4 @@
-"""Compressed glTF (:mod:`supportless.gltf_decode`): Draco and meshopt meshes read as their plain twins."""
+"""glTF as published: Draco and meshopt meshes read as their plain twins; messy characters write no crossing."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pygltflib
 import pytest
 
-from test_gltf import _blob, _values, assert_input_error, character, load, write_gltf
+from test_gltf import Prim, _blob, _values, assert_input_error, box_prim, character, load, one_hot, write_gltf
 from supportless.gltf import read_gltf_skin, write_posed_gltf
 
 
@@ -147,3 +147,38 @@ def test_a_corrupt_draco_stream_is_one_line(tmp_path, cache):
     doc.set_binary_blob(bytes(blob))
     doc.save_binary(str(tmp_path / "broken.glb"))
     assert_input_error(tmp_path / "broken.glb", cache, "Draco stream", "cannot be decoded")
+
+
+# --------------------------------------------------------------------------- #
+# messy characters as they come (issue 31): each runs, and nothing written crosses itself
+# --------------------------------------------------------------------------- #
+def open_tube(y0, y1, rx, rz, joint, segments=12):
+    """An open elliptic tube around the y axis (no caps), outward, fully on skin joint ``joint``."""
+    t = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    ring = np.column_stack([rx * np.cos(t), np.zeros(segments), rz * np.sin(t)])
+    V = np.vstack([ring + [0, y0, 0], ring + [0, y1, 0]])
+    F = []
+    for i in range(segments):
+        a, b = i, (i + 1) % segments
+        F += [[a, b + segments, b], [a, a + segments, b + segments]]
+    J, W = one_hot(len(V), joint)
+    return Prim(V, np.asarray(F, np.int64), J, W)
+
+
+def test_overlapping_open_clothing_and_joint_caps_run_and_write_no_crossing(tmp_path, cache):
+    """A jacket (an open tube crossing the column's sides), a sleeve, and small caps over the joints."""
+    import supportless as sl
+    from supportless.copyleft.cgal import intersecting_face_pairs
+
+    asset = character()
+    # wider than the column in x, narrower in z: its surface cuts through the column's
+    asset.meshes[0].append(open_tube(0.015, 0.045, 0.016, 0.008, 1))
+    asset.meshes[0].append(open_tube(0.035, 0.058, 0.007, 0.013, 2))
+    for k, y in enumerate((0.02, 0.04)):  # caps at J1 and J2, half in, half out
+        asset.meshes[0].append(box_prim((-0.012, y - 0.003, -0.012), (0.012, y + 0.003, 0.012), k + 1))
+    path = write_gltf(asset, tmp_path / "jacket.glb")
+    rig = load(path, cache)
+    assert intersecting_face_pairs(rig.vertices, rig.faces) == 0
+    result = sl.optimize(rig, particles=8, iterations=3, seed=0)
+    assert result.stats["rest_pairs"] == 0 and result.stats["written_pairs"] == 0
+    assert intersecting_face_pairs(result.print_vertices, rig.faces) == 0
