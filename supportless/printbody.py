@@ -32,7 +32,7 @@ from .copyleft.cgal import intersecting_faces, self_union
 from .errors import InputError
 from .isolated import NativeFailure
 
-__all__ = ["BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "PrintBody", "print_body", "simplify_surface",
+__all__ = ["BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body", "simplify_surface",
            "transfer_values"]
 
 #: Closed shells below this fraction of the total volume are dropped (slivers,
@@ -331,7 +331,7 @@ def _resolve_crossings(V, F, values, tol, log):
     (and flattened caps flipped, unless that makes triangles cross again).
     When it leaves crossings (also once rescaled: points left exactly on a
     face) or edges shared by four triangles (parts that touch along an
-    edge), the body is remade from its winding number (:func:`_winding_surface`):
+    edge), the body is remade from its winding number (:func:`winding_surface`):
     closed, free of crossings, true to a grid cell of :data:`WINDING_CELLS`.
     Returns the surface, its values (carried from the surface before by
     closest point) and the number of crossing pairs left; ``log`` gets a line
@@ -353,7 +353,7 @@ def _resolve_crossings(V, F, values, tol, log):
             return Vx, Fx, transfer_values(Vx, V, F, values), 0
     except NativeFailure:
         pass
-    Vx, Fx = _winding_surface(V, F, WINDING_CELLS)
+    Vx, Fx = winding_surface(V, F, WINDING_CELLS)
     after = len(intersecting_faces(Vx, Fx))
     log.append(f"{before} pairs of crossing triangles that an exact self-union could not resolve cleanly: the "
                f"body remade as the surface of its winding number on a {WINDING_CELLS}-cell grid, {len(F)} -> "
@@ -368,7 +368,7 @@ def _winding_union(pieces, log):
     V = np.vstack([V for V, _, _ in pieces])
     F = np.vstack([F + o for (_, F, _), o in zip(pieces, offsets)])
     W = np.vstack([W for _, _, W in pieces])
-    Vw, Fw = _winding_surface(V, F, WINDING_CELLS)
+    Vw, Fw = winding_surface(V, F, WINDING_CELLS)
     solid = _manifold(Vw, Fw, transfer_values(Vw, V, F, W))
     if solid is None:
         raise InputError(None, "no part of the model can be closed into a solid; "
@@ -393,7 +393,7 @@ def _touches_itself(V, F) -> bool:
     return any(len(intersecting_faces(V * k, F)) for k in (1.0, 1000.0 / np.sqrt(2.0), 1.0 / np.pi))
 
 
-def _winding_surface(V, F, cells: int):
+def winding_surface(V, F, cells: int = WINDING_CELLS):
     """The outer surface of (V, F) remade by marching cubes: inside by winding number, placed by distance.
 
     Inside is where the shells wind around a point at least half a turn

@@ -364,14 +364,12 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     -------
     rig : Rig
     """
-    from .tetmesh import (bone_samples, refine_triangulation_with_points, tetrahedralize_surface,
-                          tetrahedralize_with_skeleton)
+    from .tetmesh import bone_samples, refine_triangulation_with_points, tetrahedralize_surface
+    from .tetmesh import tetrahedralize_with_skeleton_or_remake as tetrahedralize_bones
 
     say = progress or (lambda msg: None)
-    V = np.asarray(vertices, np.float64)
-    F = np.asarray(faces, np.int64)
-    J = np.asarray(joints, np.float64)
-    B = np.asarray(bones, np.int64)
+    V, F, J, B = (np.asarray(a, t) for a, t in ((vertices, np.float64), (faces, np.int64), (joints, np.float64),
+                                                  (bones, np.int64)))
     skinned = surface_weights is not None
     coarse = simplified = None
     V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
@@ -404,7 +402,8 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         TV, TT, tet_order = _attach_surface(V, TV.astype(np.float64), TT.astype(np.int64), mesh_path)
     elif dim == 3:
         say("tetrahedralising")
-        TV, TT = tetrahedralize_with_skeleton(V, F, J, B, samples_per_bone)
+        V, F, TV, TT, note = tetrahedralize_bones(V, F, J, B, samples_per_bone)
+        warnings = list(warnings) + [note] * (note is not None)
     else:
         say("refining the planar mesh along the bones")
         TV, TT = refine_triangulation_with_points(V, F, bone_samples(J, B, samples_per_bone))

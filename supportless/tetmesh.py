@@ -17,7 +17,8 @@ from .errors import InputError
 from .isolated import NativeFailure, run_isolated
 
 __all__ = ["FTETWILD_EDGE", "FTETWILD_ENVELOPE", "bone_samples", "ftetwild_volume", "refine_triangulation_with_points",
-           "tetrahedralize_surface", "tetrahedralize_with_skeleton", "triangulate_planar"]
+           "tetrahedralize_surface", "tetrahedralize_with_skeleton", "tetrahedralize_with_skeleton_or_remake",
+           "triangulate_planar"]
 
 #: TetGen switches: p = piecewise linear complex, q2 = quality bound, Y = keep
 #: the surface unchanged (so surface vertices are the first rows), Q = quiet.
@@ -65,6 +66,57 @@ def tetrahedralize_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints
     if len(TV) < len(V) or not np.array_equal(TV[: len(V)], V):
         raise InputError(None, "TetGen changed the surface vertices; the surface may self-intersect")
     return TV, TT
+
+
+def tetrahedralize_with_skeleton_or_remake(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray,
+                                           bones: np.ndarray, samples_per_bone: int = 10):
+    """:func:`tetrahedralize_with_skeleton`; when TetGen refuses the surface, its winding-number surface.
+
+    A surface that crosses itself (a sculpt's overlapping parts, shells
+    pushed through each other) is remade as the surface of its generalized
+    winding number (:func:`supportless.printbody.winding_surface`): closed,
+    free of crossings, the same solid to a grid cell; TetGen meshes that.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+    joints : (j, 3) float64
+        Inside the solid.
+    bones : (m, 2) int64
+    samples_per_bone : int
+
+    Returns
+    -------
+    vertices : (n', 3) float64
+        The surface meshed: ``vertices`` or the remade one.
+    faces : (f', 3) int64
+    tet_vertices : (t, 3) float64
+        The first ``n'`` rows are the returned ``vertices``.
+    tets : (k, 4) int64
+    note : str or None
+        One line when the surface was remade.
+
+    Raises
+    ------
+    InputError
+        When TetGen refuses the remade surface too.
+    """
+    try:
+        return (vertices, faces, *tetrahedralize_with_skeleton(vertices, faces, joints, bones, samples_per_bone), None)
+    except InputError as first:
+        from .copyleft.cgal import intersecting_faces
+        from .printbody import WINDING_CELLS, winding_surface
+
+        crossing = len(intersecting_faces(vertices, faces))
+        if crossing == 0:
+            raise first from None
+    V, F = winding_surface(np.asarray(vertices, np.float64), np.asarray(faces, np.int64))
+    TV, TT = tetrahedralize_with_skeleton(V, F, joints, bones, samples_per_bone)
+    note = (f"the surface crosses itself ({crossing} pairs of triangles) and TetGen could not mesh it: remade as the "
+            f"surface of its winding number on a {WINDING_CELLS}-cell grid ({len(faces)} -> {len(F)} triangles); "
+            "outputs are that surface")
+    return V, F, TV, TT, note
 
 
 def tetrahedralize_surface(vertices: np.ndarray, faces: np.ndarray,

@@ -64,3 +64,33 @@ def test_a_surface_that_cuts_itself_still_gets_a_volume_mesh_with_its_vertices_f
     vol = tet_volumes(TV, TT)
     assert np.all(vol > 0)
     np.testing.assert_allclose(vol.sum(), 2.5, rtol=0.03)
+
+
+def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
+    """OBJ + TGF of two boxes pushed through each other: TetGen refuses, the winding-number surface is meshed."""
+    from supportless.copyleft.cgal import intersecting_face_pairs
+    from supportless.io import check_closed_surface
+    from supportless.tetmesh import tetrahedralize_with_skeleton_or_remake
+
+    V, F = crossing_boxes()
+    J = np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]])
+    Vs, Fs, TV, TT, note = tetrahedralize_with_skeleton_or_remake(V, F, J, np.array([[0, 1]]))
+    assert note is not None and "crosses itself" in note and "winding number" in note
+    check_closed_surface(Vs, Fs)
+    assert intersecting_face_pairs(Vs, Fs) == 0
+    np.testing.assert_array_equal(TV[: len(Vs)], Vs)
+    np.testing.assert_allclose(tet_volumes(TV, TT).sum(), 2.5, rtol=0.02)
+    # a clean surface goes through untouched
+    Vb, Fb = box((0, 0, 0), (2, 1, 1))
+    same = tetrahedralize_with_skeleton_or_remake(Vb, Fb, J, np.array([[0, 1]]))
+    assert same[0] is Vb and same[4] is None
+
+
+def test_prepare_rig_of_a_crossing_surface_says_so_and_is_clean():
+    import supportless as sl
+    from supportless.copyleft.cgal import intersecting_face_pairs
+
+    V, F = crossing_boxes()
+    rig = sl.prepare_rig(V, F, np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]]), np.array([[0, 1]]), up="z")
+    assert any("winding number" in w for w in rig.info["warnings"])
+    assert intersecting_face_pairs(rig.vertices, rig.faces) == 0
