@@ -416,9 +416,15 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
                     np.add.at(Wk, (np.repeat(np.arange(len(X)), jv.shape[1]), jv.ravel()), np.clip(wv, 0, None).ravel())
                 total = Wk.sum(1)
                 none = total <= 1e-9
-                if np.any(none):  # no weight: the skin's first (root) joint carries them
+                if np.any(none):  # no weight: the weights of the nearest weighted vertex (else the skin's first joint)
                     orphans += int(none.sum())
-                    Wk[none, 0] = total[none] = 1.0
+                    if np.all(none):
+                        Wk[:, 0] = total[:] = 1.0
+                    else:
+                        from scipy.spatial import cKDTree
+
+                        near = cKDTree(X[~none]).query(X[none])[1]
+                        Wk[none], total[none] = Wk[~none][near], total[~none][near]
                 M = skin_matrices[node.skin]
                 world = np.einsum("vk,kab,vb->va", Wk / total[:, None], M[:, :3, :],
                                   np.column_stack([X, np.ones(len(X))]))
@@ -462,7 +468,8 @@ def _skin_of(doc, buffers, path) -> GltfSkin:
         notes.append(f"skin weights of {not_numbers} vertices were not numbers (NaN or infinite); those weights "
                      "were dropped")
     if orphans:
-        notes.append(f"{orphans} skinned vertices had no weight; they follow their skin's root joint")
+        notes.append(f"{orphans} skinned vertices had no weight; they take the weights of the nearest vertex "
+                     "that has some")
     if morphs:
         notes.append(f"morph targets of {morphs} primitive(s) ignored (the base shape is posed)")
     if skipped_modes:

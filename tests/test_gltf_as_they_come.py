@@ -182,3 +182,19 @@ def test_overlapping_open_clothing_and_joint_caps_run_and_write_no_crossing(tmp_
     result = sl.optimize(rig, particles=8, iterations=3, seed=0)
     assert result.stats["rest_pairs"] == 0 and result.stats["written_pairs"] == 0
     assert intersecting_face_pairs(result.print_vertices, rig.faces) == 0
+
+
+def test_a_vertex_with_no_weight_takes_its_neighbours_not_an_unweighted_root(tmp_path, cache):
+    """Skin joint 0 is an unweighted root (RootA): a weightless vertex on it would stop the roots' pruning."""
+    plain = load(write_gltf(character(helpers=True), tmp_path / "plain.glb"), cache)
+    asset = character(helpers=True)
+    prim = asset.meshes[0][0]
+    prim.weights = prim.weights.copy()
+    prim.weights[0] = 0.0
+    path = write_gltf(asset, tmp_path / "zeroed.glb")
+    skin = read_gltf_skin(path)
+    assert any("1 skinned vertices had no weight" in note for note in skin.notes)
+    first = int(np.flatnonzero(skin.weights[0])[0])
+    assert skin.joint_names[first] == "J0" and skin.weights[0, first] == 1.0  # its ring's joint, not RootA
+    rig = load(path, tmp_path / "cache2")
+    assert rig.bone_count == plain.bone_count and rig.labels == plain.labels
