@@ -346,6 +346,14 @@ def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
 # --------------------------------------------------------------------------- #
 # TGF skeletons
 # --------------------------------------------------------------------------- #
+def _tgf_index(token: str) -> int:
+    """A joint index of a TGF line; ValueError for one no skeleton has (over a billion: 31 digits overflow)."""
+    value = int(token)
+    if abs(value) >= 2**31:
+        raise ValueError(token)
+    return value
+
+
 def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     """Read a skeleton in libigl's TGF format.
 
@@ -392,11 +400,11 @@ def read_tgf(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
                 if len(tokens) < 4:
                     raise ValueError
                 joints.append([float(t) for t in tokens[1:4]])
-                index.append((int(tokens[0]), lineno))
+                index.append((_tgf_index(tokens[0]), lineno))
             elif section == 1:
                 if len(tokens) < 2:
                     raise ValueError
-                bones.append([int(tokens[0]), int(tokens[1])])
+                bones.append([_tgf_index(tokens[0]), _tgf_index(tokens[1])])
         except ValueError:
             what = "joint 'index x y z'" if section == 0 else "bone 'i j'"
             raise InputError(path, f"line {lineno} is not a {what} line: {line.strip()!r}") from None

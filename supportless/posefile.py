@@ -99,7 +99,7 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None,
     try:
         data = json.loads(path.read_text())
         angles = np.asarray(data["angles"], dtype=np.float64)
-    except (ValueError, KeyError, TypeError) as exc:
+    except (ValueError, KeyError, TypeError, RecursionError, OverflowError) as exc:  # nested 100 000 deep, 1e400
         raise InputError(path, f"not a pose file (JSON with 'angles' and 'bones'): {_one_line(exc)}") from None
     if angles.ndim != 2 or angles.shape[1] != 3:
         raise InputError(path, f"'angles' must be a list of [x, y, z] per bone, got shape {angles.shape}")
@@ -113,7 +113,7 @@ def read_pose(path: str | os.PathLike, bones: np.ndarray | None = None,
                                    f"{len(bones)}; use the skeleton the pose was made with")
         try:
             stored = np.asarray(data.get("bones", []), dtype=np.int64)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError, RecursionError):  # an index of 10**30
             raise InputError(path, "'bones' must be a list of [i, j] joint pairs") from None
         if stored.size and (stored.shape != bones.shape or np.any(stored != bones)):
             k = next((i for i in range(min(len(stored), len(bones))) if stored.ndim != 2
@@ -150,13 +150,13 @@ def read_print_rotation(path: str | os.PathLike, dim: int = 3) -> np.ndarray:
     path = Path(path)
     try:
         data = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:
         raise InputError(path, f"not a pose file: {_one_line(exc)}") from None
     if "print_rotation" not in data:
         return np.eye(dim)
     try:
         R = np.asarray(data["print_rotation"], np.float64)
-    except (ValueError, TypeError):
+    except (ValueError, TypeError, OverflowError, RecursionError):
         R = np.zeros(0)
     if R.shape != (dim, dim) or not np.allclose(R @ R.T, np.eye(dim), atol=1e-6) or np.linalg.det(R) < 0:
         raise InputError(path, f"'print_rotation' must be a {dim}x{dim} rotation matrix (rows of numbers); "
@@ -186,7 +186,7 @@ def read_pose_print_frame(path: str | os.PathLike) -> dict | None:
     path = Path(path)
     try:
         data = json.loads(path.read_text())
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, RecursionError) as exc:
         raise InputError(path, f"not a pose file: {_one_line(exc)}") from None
     frame = data.get("print_frame") if isinstance(data, dict) else None
     if frame is None:
@@ -216,7 +216,7 @@ def _check_tree(path: Path, data: dict, tree, tree_v1) -> None:
                                "its angles would give another pose; run optimize again for a pose of this rig")
     try:
         parents, pivots = (np.asarray(stored[k], np.int64) for k in ("parents", "pivots"))
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, OverflowError):
         raise InputError(path, "'tree' must hold 'parents' and 'pivots', one integer per bone") from None
     if parents.shape != np.shape(tree[0]) or not _same_tree((parents, pivots), tree):
         raise InputError(path, "the pose's angles are relative to another kinematic tree of this skeleton (another "

@@ -457,3 +457,30 @@ def test_written_files_respect_the_umask(tmp_path, branch_mesh):
         os.umask(old)
     for name in ("m.stl", "t.txt"):
         assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o644, name
+
+
+@pytest.mark.parametrize("text, fragment", [
+    ('{"angles": ' + "[" * 100000 + "]" * 100000 + ', "bones": []}', "not a pose file"),
+    ('{"angles": [[0, 0, 0]], "bones": [[0, 1e30]]}', "pose"),
+    ('{"angles": [[0, 0, 0]], "bones": [[0, ' + "1" + "0" * 30 + "]]}", "pose"),
+], ids=["nested-100000-deep", "index-1e30", "index-10**30"])
+def test_a_pose_file_no_tool_wrote_is_one_line(tmp_path, text, fragment):
+    path = tmp_path / "pose.json"
+    path.write_text(text)
+    with pytest.raises(sl.InputError, match=fragment) as info:
+        sl.read_pose(path, np.array([[0, 1]]))
+    assert "\n" not in str(info.value)
+    from supportless.posefile import read_pose_print_frame, read_print_rotation
+
+    for read in (read_pose_print_frame, read_print_rotation):  # the other readers of the same file
+        try:
+            read(path)
+        except sl.InputError as exc:
+            assert "\n" not in str(exc)
+
+
+def test_a_tgf_index_of_31_digits_is_one_line(tmp_path):
+    path = tmp_path / "big.tgf"
+    path.write_text("1 0 0 0\n2 0 1 0\n#\n1 " + "9" * 31 + "\n")
+    with pytest.raises(sl.InputError, match=r"line 4 is not a bone 'i j' line"):
+        sl.read_tgf(path)
