@@ -17,6 +17,7 @@ contact sheet at the end.
 from __future__ import annotations
 
 import csv
+import glob
 import io
 import json
 import os
@@ -281,8 +282,11 @@ def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     for spec in specs:  # scratch folders of a run that was killed
-        for stale in out.glob(f".{spec.name}.*"):
+        for stale in out.glob(glob.escape(f".{spec.name}.") + "*"):  # a name may hold [ ] * ?
             shutil.rmtree(stale, ignore_errors=True)
+    for own in ("summary.csv", "contact_sheet.png"):  # and its half-written files: this run owns the folder
+        for stale in out.glob(f".{Path(own).stem}.*{Path(own).suffix}"):
+            stale.unlink(missing_ok=True)
     rows: dict[str, dict] = {}
     todo = []
     for spec in specs:

@@ -53,6 +53,7 @@ def atomic_path(path: str | os.PathLike):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    _remove_stale_temporaries(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
@@ -63,6 +64,28 @@ def atomic_path(path: str | os.PathLike):
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+#: A temporary file of :func:`atomic_path` untouched this long was left by a run that was killed: the next
+#: write to the same destination removes it (a younger one may be another process's write under way).
+STALE_TEMPORARY_SECONDS = 3600.0
+
+
+def _remove_stale_temporaries(path: Path) -> None:
+    """Remove ``.STEM.XXXXXXXX.SUFFIX`` files beside ``path`` older than :data:`STALE_TEMPORARY_SECONDS`."""
+    import glob
+    import re
+    import time
+
+    pattern = re.compile(rf"^\.{re.escape(path.stem)}\.[A-Za-z0-9_]{{8}}{re.escape(path.suffix)}$")
+    now = time.time()
+    for name in glob.glob(glob.escape(str(path.parent / f".{path.stem}.")) + "*"):
+        stale = Path(name)
+        try:
+            if pattern.match(stale.name) and now - stale.stat().st_mtime > STALE_TEMPORARY_SECONDS:
+                stale.unlink()
+        except OSError:  # gone already, or not ours to remove
+            pass
 
 
 def _umask() -> int:

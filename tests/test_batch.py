@@ -173,3 +173,25 @@ def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback():
     row = _row_of(Died(), "X")
     assert row["model"] == "X" and row["status"] == "failed" and "died" in row["reason"]
     assert _row_of(Done(), "Y") == {"model": "Y", "status": "ok"}
+
+
+def test_a_rerun_removes_what_a_killed_run_left_even_under_names_with_brackets(tmp_path):
+    """``a[1].obj``: its scratch ``.a[1].x/`` is not a glob character class; the sheet's and summary's temporaries go."""
+    from supportless.cli import main
+
+    d = tmp_path / "in"
+    d.mkdir()
+    V, F, J, B = sl.demo_figure("branch")[:4]
+    sl.write_mesh(d / "a[1].obj", V, F)
+    sl.write_tgf(d / "a[1].tgf", J, B)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".a[1].k3j_x9ab").mkdir()  # what a killed run leaves
+    (out / ".a[1].k3j_x9ab" / "a[1].stl").write_bytes(b"half")
+    (out / ".contact_sheet.q1w2e3r4.png").write_bytes(b"half")
+    (out / ".summary.z9y8x7w6.csv").write_text("half")
+    result = CliRunner().invoke(main, ["batch", str(d), "-o", str(out), "--workers", "1",
+                                       "--cache-dir", str(tmp_path / "cache"), *FAST])
+    assert result.exit_code == 0, result.output
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+    assert _summary(out)["a[1]"]["status"] == "ok"

@@ -484,3 +484,41 @@ def test_a_tgf_index_of_31_digits_is_one_line(tmp_path):
     path.write_text("1 0 0 0\n2 0 1 0\n#\n1 " + "9" * 31 + "\n")
     with pytest.raises(sl.InputError, match=r"line 4 is not a bone 'i j' line"):
         sl.read_tgf(path)
+
+
+def test_a_killed_writes_temporary_file_is_removed_by_the_next_write_a_young_one_is_not(tmp_path):
+    """``.pose.k3j_x9ab.json`` an hour old was left by a killed run; one a second old may be another's write."""
+    import os
+    import time
+
+    from supportless.io import STALE_TEMPORARY_SECONDS, atomic_path
+
+    old, young = tmp_path / ".pose.k3j_x9ab.json", tmp_path / ".pose.q1w2e3r4.json"
+    other = tmp_path / ".poses.k3j_x9ab.json"  # another destination's
+    for f in (old, young, other):
+        f.write_text("{}")
+    past = time.time() - STALE_TEMPORARY_SECONDS - 60
+    os.utime(old, (past, past))
+    os.utime(other, (past, past))
+    with atomic_path(tmp_path / "pose.json") as tmp:
+        tmp.write_text("{}")
+    assert not old.exists() and young.exists() and other.exists()
+    assert (tmp_path / "pose.json").read_text() == "{}"
+
+
+def test_a_rig_cache_entry_left_half_written_by_a_kill_is_removed_by_the_next_write(tmp_path):
+    import os
+    import time
+
+    import supportless as sl
+    from supportless.io import STALE_TEMPORARY_SECONDS
+
+    sl.load_rig("demo:branch", cache_dir=tmp_path)
+    entry = next(tmp_path.glob("*.npz"))
+    leftover = tmp_path / f".{entry.stem}.abcd1234.npz"
+    leftover.write_bytes(b"half")
+    past = time.time() - STALE_TEMPORARY_SECONDS - 1
+    os.utime(leftover, (past, past))
+    entry.unlink()  # the rerun writes the entry again
+    sl.load_rig("demo:branch", cache_dir=tmp_path)
+    assert not leftover.exists() and entry.exists()
