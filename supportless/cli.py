@@ -417,11 +417,20 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
     R = read_print_rotation(pose, rig.dim)
     _say_frame(rig, frame)
     standing = place_on_plate(rig.pose(angles), rig.up)
+    failed = 0
     for path, printed in ((output, True), (upright_out, False)):
         if path:
-            _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing,
-                         frame)
+            try:
+                _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing,
+                             frame)
+            except OSError as exc:  # a full disk, a folder not writable: one line, as optimize says it
+                failed += 1
+                click.echo(f"supportless: error: {exc.filename or path}: cannot write: {exc.strerror or exc}",
+                           err=True)
+                continue
             click.echo(f"wrote {path}")
+    if failed:
+        sys.exit(EXIT_WRITE_FAILED)
 
 
 def _write_posed(path, rig, angles, standing, vertices, frame) -> str:

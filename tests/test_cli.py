@@ -482,3 +482,22 @@ def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(bra
                  "--particles", 4, "--iterations", 1, "-q", "-o", tmp_path / "out.stl")
     assert result.exit_code == 0, result.output
     assert "every bone of" in result.stderr and "the search only turns it" in result.stderr
+
+
+def test_apply_on_a_full_disk_is_one_line_and_no_file(branch_files, tmp_path, monkeypatch):
+    import errno
+
+    import supportless.io as sio
+    from supportless.cli_common import EXIT_WRITE_FAILED
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    sl.write_pose(tmp_path / "pose.json", np.zeros((len(branch_files["bones"]), 3)), branch_files["bones"])
+    monkeypatch.setattr(sio, "write_mesh", full)
+    result = run("apply", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--pose",
+                 tmp_path / "pose.json", "-o", tmp_path / "posed.stl")
+    assert result.exit_code == EXIT_WRITE_FAILED
+    errors = [line for line in result.stderr.splitlines() if line.startswith("supportless: error")]
+    assert len(errors) == 1 and "No space left on device" in errors[0] and "Traceback" not in result.output
+    assert not (tmp_path / "posed.stl").exists()
