@@ -318,7 +318,7 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
                + (f"; bridged {bridged} gap(s) under {BRIDGE_GAP:.0%} of the size" if bridged else "")
                + (f"; dropped {int(small.sum())} floating piece(s) under {ISLAND_MIN_VOLUME:.0%} of the volume "
                   f"({vols[small].sum() / vols.sum():.2%})" if np.any(small) else ""))
-    Vu, Fu, Wu, _ = _resolve_crossings(Vu, Fu, Wu, SIMPLIFY_TOLERANCE * size, log)
+    Vu, Fu, Wu = _resolve_crossings(Vu, Fu, Wu, SIMPLIFY_TOLERANCE * size, log)
     if islands > 1:
         log.append(f"warning: the print body is {islands} separate solids; they print as separate pieces")
     return PrintBody(Vu, Fu, Wu, islands, log)
@@ -333,13 +333,13 @@ def _resolve_crossings(V, F, values, tol, log):
     face) or edges shared by four triangles (parts that touch along an
     edge), the body is remade from its winding number (:func:`winding_surface`):
     closed, free of crossings, true to a grid cell of :data:`WINDING_CELLS`.
-    Returns the surface, its values (carried from the surface before by
-    closest point) and the number of crossing pairs left; ``log`` gets a line
-    when there were any.
+    Returns the surface and its values (carried from the surface before by
+    closest point); ``log`` gets a line when there were crossings, and says
+    how many remain.
     """
     before = len(intersecting_faces(V, F))
     if before == 0:
-        return V, F, values, 0
+        return V, F, values
     try:
         Vx, Fx = self_union(V, F)
         Vx, Fx, _, _ = _weld(Vx, Fx, np.zeros((len(Vx), 0)), tol * 1e-3)
@@ -350,7 +350,7 @@ def _resolve_crossings(V, F, values, tol, log):
         if len(Fx) and _is_closed(Fx) and not _touches_itself(Vx, Fx):
             log.append(f"resolved {before} pairs of crossing triangles by an exact self-union "
                        f"(volume {(_volume(Vx, Fx) / _volume(V, F) - 1) * 100:+.2f} %)")
-            return Vx, Fx, transfer_values(Vx, V, F, values), 0
+            return Vx, Fx, transfer_values(Vx, V, F, values)
     except NativeFailure:
         pass
     Vx, Fx = winding_surface(V, F, WINDING_CELLS)
@@ -359,7 +359,7 @@ def _resolve_crossings(V, F, values, tol, log):
                f"body remade as the surface of its winding number on a {WINDING_CELLS}-cell grid, {len(F)} -> "
                f"{len(Fx)} triangles (volume {(_volume(Vx, Fx) / _volume(V, F) - 1) * 100:+.1f} %)"
                + (f"; warning: {after} remain" if after else ""))
-    return Vx, Fx, transfer_values(Vx, V, F, values), after
+    return Vx, Fx, transfer_values(Vx, V, F, values)
 
 
 def _winding_union(pieces, log):

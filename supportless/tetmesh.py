@@ -192,9 +192,9 @@ def ftetwild_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray
 
     The inside is decided by winding number, so overlapping shells become
     one solid; the boundary stays within :data:`FTETWILD_ENVELOPE` of the
-    surface. Runs in a child process, on one thread: with more, fTetWild's
-    result depends on the threads' timing, and the rig (its cache, the bones
-    that carry weight) would differ from run to run.
+    surface. Runs in a child process. Its result varies from run to run
+    (it seeds itself from ``std::random_device``, on one thread as on many),
+    so it is the last resort after TetGen.
 
     Parameters
     ----------
@@ -224,7 +224,7 @@ def _ftetwild(V, F):
     except ImportError:
         raise RuntimeError("pytetwild is not installed (pip install 'pytetwild>=0.2.3,<0.3')") from None
     TV, TT = pytetwild.tetrahedralize(V, F, edge_length_fac=FTETWILD_EDGE, epsilon=FTETWILD_ENVELOPE,
-                                      stop_energy=50.0, num_opt_iter=20, num_threads=1, quiet=True)
+                                      stop_energy=50.0, num_opt_iter=20, quiet=True)
     TV, TT = np.asarray(TV, np.float64), np.asarray(TT, np.int64)
     if len(TT) == 0:
         raise RuntimeError("no tetrahedra")
