@@ -4,7 +4,7 @@ Runs :func:`supportless.bench_targets.run_targets` (each case in its own
 process, empty rig cache, numba warmed up) and, with ``--out FILE``, replaces
 the "## Speed targets" section of FILE with the table.
 
-    python benchmarks/targets.py [--cases bunny bb-bunny character robot bunny111k] [--reference]
+    python benchmarks/targets.py [--cases bunny bb-bunny character robot bunny111k] [--reference] [--choice]
                                  [--out benchmarks/RESULTS.md]
 """
 
@@ -25,9 +25,12 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--cases", nargs="+", default=list(CASES), choices=CASES)
     p.add_argument("--reference", action="store_true", help="also search the full surface of proxy cases")
+    p.add_argument("--choice", action="store_true",
+                   help="also time the pose-only search and the choice among the answers (model, PrusaSlicer)")
     p.add_argument("--out", default=None)
     args = p.parse_args(argv)
-    rows = run_targets(args.cases, reference=args.reference, echo=lambda s: print(s, file=sys.stderr, flush=True))
+    rows = run_targets(args.cases, reference=args.reference, echo=lambda s: print(s, file=sys.stderr, flush=True),
+                       choice=args.choice)
     text = "\n".join([HEADING, "", "Command: `python benchmarks/targets.py " + " ".join(argv) + "`", "",
                       format_table(rows)]) + "\n"
     print(text)

@@ -124,7 +124,9 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
         The printed height of the rest pose (:func:`supportless.printframe.print_frame`;
         default 60 mm): the STL is written +Z up, in millimetres, on the plate.
     slice_check : bool
-        Also slice the rest pose and the written STL with PrusaSlicer.
+        Let PrusaSlicer choose among the answers the search weighed
+        (:func:`supportless.ranking.slice_choice`), and slice the rest pose
+        and the written STL with it.
 
     Returns
     -------
@@ -170,6 +172,10 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     rig = load_rig(spec.mesh, spec.skeleton, up, cache_dir=cache_dir)
     frame = rig_print_frame(rig, height_mm)
     result = optimize(rig, SearchSettings.from_dict(settings))
+    if slice_check and result.choice is not None:  # PrusaSlicer chooses among the answers, as optimize does
+        from .ranking import SLICE_RANK, slice_choice
+
+        result = slice_choice(rig, result, SLICE_RANK, height_mm=frame.height_mm)
     report = build_report(rig, result, frame)
     stl = folder / f"{spec.name}.stl"
     write_mesh(stl, frame.place(result.print_vertices), rig.faces)

@@ -81,7 +81,7 @@ def _quality(rig, result) -> dict:
             "value": result.value, "pairs": report["after"]["intersecting_face_pairs"]}
 
 
-def measure_case(case: str, reference: bool = False, settings=None) -> dict:
+def measure_case(case: str, reference: bool = False, settings=None, choice: bool = False) -> dict:
     """Prepare and search one case in this process (see the module docstring).
 
     Parameters
@@ -92,6 +92,10 @@ def measure_case(case: str, reference: bool = False, settings=None) -> dict:
         Also search the full surface when the rig has a proxy.
     settings : SearchSettings, optional
         The search (default: the tool's defaults, as measured for the targets).
+    choice : bool
+        Also time the pose-only search (``orient="keep"``), the default's
+        choice among its answers (:func:`supportless.choice.choose`) and,
+        when PrusaSlicer is found, the slicer's (:func:`supportless.ranking.slice_choice`).
 
     Returns
     -------
@@ -99,7 +103,9 @@ def measure_case(case: str, reference: bool = False, settings=None) -> dict:
         ``case``, ``faces``, ``proxy_faces`` (None without a proxy), ``bones``,
         ``free_bones``, ``prepare_s``, ``search_s``, ``reduction`` (%),
         ``distortion``, ``value``, ``pairs``, ``peak_mb`` and, with
-        ``reference``, the same quality keys and ``search_s`` under ``ref_``.
+        ``reference``, the same quality keys and ``search_s`` under ``ref_``;
+        with ``choice``, ``pose_only_s``, ``choice_s``, ``chosen_kind`` and,
+        with a slicer, ``slice_s``, ``sliced`` (answers sliced) and ``sliced_kind``.
     """
     import resource
     import time
@@ -119,6 +125,8 @@ def measure_case(case: str, reference: bool = False, settings=None) -> dict:
            "proxy_faces": None if rig.coarse_faces is None else len(rig.coarse_faces),
            "free_bones": int((~settings.fixed_bones(rig)).sum()), "prepare_s": prepare,
            "search_s": time.perf_counter() - t} | _quality(rig, result)
+    if choice:
+        row |= _choice_times(rig, settings, result)
     if reference and rig.coarse_faces is not None:
         t = time.perf_counter()
         full = optimize(rig, settings, objective=settings.objective(rig))  # the full surface, no proxy
@@ -127,7 +135,28 @@ def measure_case(case: str, reference: bool = False, settings=None) -> dict:
     return row
 
 
-def run_targets(cases=CASES, reference: bool = False, echo: Callable[[str], None] = print) -> list[dict]:
+def _choice_times(rig, settings, result) -> dict:
+    """Seconds of the pose-only search and of the choices after the default search (see :func:`measure_case`)."""
+    import time
+
+    from .ranking import SLICE_RANK, slice_choice
+    from .search import optimize
+    from .slicer import find_prusa_slicer
+
+    t = time.perf_counter()
+    optimize(rig, settings.replace(orient="keep"))
+    row = {"pose_only_s": time.perf_counter() - t, "choice_s": result.stats.get("choice_seconds", 0.0),
+           "chosen_kind": result.stats.get("chosen_kind")}
+    if result.choice is not None and find_prusa_slicer():
+        t = time.perf_counter()
+        sliced = slice_choice(rig, result, SLICE_RANK, height_mm=60.0)
+        row |= {"slice_s": time.perf_counter() - t, "sliced_kind": sliced.stats.get("chosen_kind"),
+                "sliced": sum(c.sliced_mm is not None for c in sliced.choice.candidates)}
+    return row
+
+
+def run_targets(cases=CASES, reference: bool = False, echo: Callable[[str], None] = print,
+                choice: bool = False) -> list[dict]:
     """Measure cases, each in a child process; print progress and the table through ``echo``.
 
     Returns
@@ -142,7 +171,7 @@ def run_targets(cases=CASES, reference: bool = False, echo: Callable[[str], None
         if why is None:
             echo(f"{case}: preparing and searching ...")
             run = subprocess.run([sys.executable, "-m", "supportless.bench_targets", case]
-                                 + (["--reference"] if reference else []),
+                                 + (["--reference"] if reference else []) + (["--choice"] if choice else []),
                                  capture_output=True, text=True, env=dict(os.environ))
             lines = run.stdout.strip().splitlines()
             if run.returncode == 0 and lines:
@@ -183,8 +212,26 @@ def format_table(rows: list[dict]) -> str:
         lines.append(f"| {r['case']} | {r['faces']}{searched} | {r['bones']} ({r['free_bones']}) | "
                      f"{r['prepare_s']:.1f} s | {r['search_s']:.1f} s | {r['peak_mb']:.0f} MB | {quality(r)} | "
                      f"{ref} | {TARGETS[r['case']]} |")
+    timed = [r for r in rows if "pose_only_s" in r]
+    if timed:
+        lines += ["", "The choice among the answers (issue 32): the default search with the slicer model's choice, "
+                  "and with PrusaSlicer's, against the pose-only search (`orient='keep'`); targets ≤ 1.6× without a "
+                  "slicer, ≤ 2.5× with one.", "",
+                  "| case | pose only | default, model's choice | × pose only | + slicing (answers) | "
+                  "× pose only with the slicer | kind chosen (model / slicer) |", "|---|---|---|---|---|---|---|"]
+        for r in timed:
+            model = r["search_s"] / r["pose_only_s"]
+            if "slice_s" in r:
+                slicing = f"{r['slice_s']:.1f} s ({r['sliced']})"
+                ratio = f"{(r['search_s'] + r['slice_s']) / r['pose_only_s']:.2f}"
+            else:
+                slicing, ratio = "no slicer", "–"
+            lines.append(f"| {r['case']} | {r['pose_only_s']:.1f} s | {r['search_s']:.1f} s "
+                         f"(choice {r['choice_s']:.2f} s) | {model:.2f} | {slicing} | {ratio} | "
+                         f"{r['chosen_kind']} / {r.get('sliced_kind', '–')} |")
     return "\n".join(lines)
 
 
 if __name__ == "__main__":  # the child process of run_targets
-    print(json.dumps(measure_case(sys.argv[1], reference="--reference" in sys.argv[2:])))
+    print(json.dumps(measure_case(sys.argv[1], reference="--reference" in sys.argv[2:],
+                                  choice="--choice" in sys.argv[2:])))

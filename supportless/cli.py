@@ -226,9 +226,11 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
               help="Folder for before/after pictures and the convergence plot.")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
               help="Slice the rest pose and the written file with PrusaSlicer (needs prusa-slicer).")
-@click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=1), default=1, show_default=True,
-              help="Slice up to K distinct good poses the search found (its best among them) with PrusaSlicer, "
-                   "two at a time, and keep the one with the least support (needs prusa-slicer).")
+@click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=0), default=None,
+              help="Slice up to K of the best answers (the search's, the best pose as it stands, the best turned "
+                   "rest pose; by predicted support) with PrusaSlicer, two at a time, and keep the one with the "
+                   "least support. Default: 2 when PrusaSlicer is found, else the slicer model chooses. "
+                   "0: no choice, the search's own best.")
 @click.option("--pareto", "pareto_count", type=click.IntRange(min=2), default=None,
               help="Also return up to N poses along the front of least support against least distortion: "
                    "OUT-1 .. OUT-N (least support first), their poses and OUT-front.png.")
@@ -249,7 +251,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if pareto_count:
         from .pareto import front_paths
 
-        if slice_rank_count > 1:
+        if slice_rank_count:
             _fail("--pareto and --slice-rank do not go together; choose one")
         meshes, poses, gallery = front_paths(output, pareto_count)
         front_files = [("--pareto", f) for f in (*meshes, *poses, gallery)]
@@ -257,12 +259,14 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
                     *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
     profile = _printer_profile(profile_path)
     settings = _settings(profile, **search_options)
+    if slice_rank_count == 0:
+        settings = settings.replace(choose=False)
     console = _console()
-    if slice_rank_count > 1:
+    if slice_rank_count:
         _require_slicer("--slice-rank")
     _check_bones_early(settings, model, skeleton)
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units)
-    if slice_rank_count > 1 and rig.dim != 3:
+    if slice_rank_count and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     if slice_check_flag and rig.dim != 3:
         _fail(f"{model}: --slice-check slices 3D models only; this one is planar")
@@ -273,10 +277,9 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
         if result.interrupted:
             console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
         extra = {"printer_profile": profile.summary()}
-        if slice_rank_count > 1 and not result.interrupted:
-            ranked = _slice_rank(rig, result, slice_rank_count, console, profile, frame)
-            if ranked is not None:
-                result, extra["slice_rank"] = ranked.result, ranked.to_dict()
+        sliced = False
+        if not result.interrupted and front is None:
+            result, sliced = _slice_choice(rig, result, slice_rank_count, console, profile, frame, quiet)
         if front is not None:
             from .pareto import write_front
 
@@ -291,6 +294,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if slice_check_flag and not failed and not stopped:  # the slicer's figures lead the summary
         report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile)
     _print_results(console, report, verbose)  # after the files: a closed stdout (| head) loses nothing
+    if result.choice is not None:
+        _print_choice(console, result.choice, slicer_tried=sliced)
     if result.stats.get("fell_back_to_rest"):
         turned = not np.allclose(result.rotation, np.eye(rig.dim))
         click.echo(f"supportless: warning: {rig.name}: the pose found crosses itself as written "
@@ -313,27 +318,43 @@ def _check_bones_early(settings, model, skeleton) -> None:
         settings.check_bones(len(read_tgf(tgf)[1]))
 
 
-def _slice_rank(rig, result, count, console, profile, frame):
-    """Slice the search's distinct good poses and keep the cheapest (see :func:`supportless.ranking.slice_rank`)."""
-    from .ranking import slice_rank
-    from .slicer import SlicerError
+def _slice_choice(rig, result, count, console, profile, frame, quiet=False):
+    """PrusaSlicer's choice among the best answers (:func:`supportless.ranking.slice_choice`).
 
-    console.print(f"slicing up to {count} distinct good poses with PrusaSlicer, two at a time ...")
-    try:
-        ranked = slice_rank(rig, result, count, profile=profile, height_mm=frame.height_mm)
-    except SlicerError as exc:
-        if interrupt_requested():  # Ctrl-C reached the slicer too: keep the search's own pose
-            console.print("[yellow]interrupted: slice-ranking skipped, writing the search's pose[/yellow]")
-            return None
-        click.echo(f"supportless: error: slice-ranking failed: {exc}", err=True)
-        sys.exit(EXIT_MISSING_TOOL)
-    for e in ranked.entries:
-        mark = "  <- chosen" if e["chosen"] else ""
-        console.print(f"  pose {e['rank']}: objective {e['value']:.4g}, {e['distance_deg']:.0f} deg from the "
-                      f"search's best, PrusaSlicer support {e['support_mm']:.0f} mm{mark}")
-    if len(ranked.entries) < count:
-        console.print(f"  (only {len(ranked.entries)} distinct good poses without self-intersection)")
-    return ranked
+    ``count`` None: :data:`~supportless.ranking.SLICE_RANK` answers when PrusaSlicer is found and the search
+    weighed simpler answers (its default), else the slicer model's choice stands. Returns the result and
+    whether PrusaSlicer was asked.
+    """
+    from .ranking import SLICE_RANK, slice_choice
+    from .slicer import SlicerError, find_prusa_slicer
+
+    if count is None:
+        count = SLICE_RANK if result.choice is not None and find_prusa_slicer() else 0
+    if count:
+        if not quiet:
+            console.print(f"choosing among the best answers: slicing up to {count} with PrusaSlicer, two at a "
+                          "time ...")
+        try:
+            result = slice_choice(rig, result, count, profile=profile, height_mm=frame.height_mm)
+        except SlicerError as exc:
+            if interrupt_requested():  # Ctrl-C reached the slicer too: keep the model's choice
+                console.print("[yellow]interrupted: slicing skipped, writing the slicer model's choice[/yellow]")
+                return result, False
+            click.echo(f"supportless: error: slicing the answers failed: {exc}", err=True)
+            sys.exit(EXIT_MISSING_TOOL)
+    return result, bool(count)
+
+
+def _print_choice(console, choice, slicer_tried):
+    """One line per answer weighed, and who chose."""
+    for i, c in enumerate(choice.candidates):
+        sliced = "" if c.sliced_mm is None else f", PrusaSlicer {c.sliced_mm:.0f} mm"
+        mark = ("  <- chosen" if i == choice.chosen else "") + \
+            ("" if c.same_as is None else f"  (prints as answer {c.same_as + 1})")
+        console.print(f"  {i + 1}. {c.kind:<13} predicted {c.predicted_mm:6.0f} mm{sliced}{mark}")
+    who = "PrusaSlicer" if choice.by == "slicer" else "the slicer model" + \
+        ("" if slicer_tried else " (PrusaSlicer not found or not asked for: nothing sliced)")
+    console.print(f"  chosen by {who}: {choice.reason}")
 
 
 def _print_results(console, report, verbose=False):

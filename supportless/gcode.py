@@ -10,9 +10,12 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
+
 from .errors import SlicerError
 
-__all__ = ["FILAMENT_DIAMETER_MM", "mm_to_cm3", "parse_filament_used", "parse_print_time", "read_gcode_tail"]
+__all__ = ["FILAMENT_DIAMETER_MM", "SUPPORT_FEATURES", "feature_filament", "mm_to_cm3", "parse_filament_used",
+           "parse_print_time", "read_gcode_tail"]
 
 #: The filament diameter when a profile gives none, mm.
 FILAMENT_DIAMETER_MM = 1.75
@@ -59,6 +62,58 @@ def parse_filament_used(gcode: str) -> tuple[float, float | None]:
     except ValueError:
         cm3 = None
     return mm, cm3
+
+
+#: PrusaSlicer's ``;TYPE:`` labels of support extrusion.
+SUPPORT_FEATURES = ("Support material", "Support material interface")
+
+# a ;TYPE: line, or a move / extruder reset / extrusion mode line:
+# (feature, command, the text up to an X or Y before any E (empty: no X or Y), E value)
+_LINE_RE = re.compile(r"^(?:;TYPE:([^\n]*)|(G[01] |G92|M82|M83)([^\n;EXY]*[XY])?[^\n;E]*(?:E(-?\d*\.?\d+))?)", re.M)
+
+
+def feature_filament(gcode: str) -> dict[str, float]:
+    """Filament extruded per feature (``;TYPE:`` label) of PrusaSlicer G-code.
+
+    Extrusion is counted on moves in X or Y that push filament forward
+    (``G1 X.. Y.. E..``): retractions and their undoing are not filament laid
+    down. Absolute (``M82``, PrusaSlicer's default, with ``G92 E`` resets) and
+    relative (``M83``) extrusion are both read.
+
+    Parameters
+    ----------
+    gcode : str
+        The whole G-code.
+
+    Returns
+    -------
+    mm : dict of str -> float
+        Filament length per feature, mm; moves before the first ``;TYPE:``
+        count under ``""``. Their sum is the file's ``; filament used [mm]``.
+    """
+    rows = _LINE_RE.findall(gcode)
+    if not rows:
+        return {}
+    feature, command, planar_text, e_text = (np.array(column) for column in zip(*rows))
+    n = len(rows)
+    is_type = command == ""
+    labels, code = np.unique(np.char.strip(feature[is_type]), return_inverse=True)
+    codes = np.full(n, -1)
+    codes[is_type] = code
+    # the feature of each line: that of the last ;TYPE: at or before it (-1: none yet)
+    last = np.maximum.accumulate(np.where(is_type, np.arange(n), -1))
+    feature_of = np.where(last >= 0, codes[np.maximum(last, 0)], -1)
+    # the extrusion mode of each line: the last M82/M83 at or before it (absolute before any)
+    set_at = np.maximum.accumulate(np.where((command == "M82") | (command == "M83"), np.arange(n), -1))
+    relative = (set_at >= 0) & (command[np.maximum(set_at, 0)] == "M83")
+    idx = np.flatnonzero(e_text != "")
+    e = e_text[idx].astype(np.float64)
+    previous = np.concatenate([[0.0], e[:-1]])  # the E the last extruding move or reset left
+    step = np.where(relative[idx], e, e - previous)
+    planar = planar_text[idx] != ""
+    counted = planar & (command[idx] != "G92") & (step > 0)
+    sums = np.bincount(feature_of[idx][counted] + 1, weights=step[counted], minlength=len(labels) + 1)
+    return {name: float(mm) for name, mm in zip(["", *labels.tolist()], sums) if name or mm > 0}
 
 
 _TIME_RE = re.compile(r"^;\s*estimated printing time \(normal mode\)\s*=\s*(.+?)\s*$", re.M)

@@ -1,85 +1,191 @@
-"""Slice-ranking: let PrusaSlicer pick among the search's best distinct poses.
+"""Slice-ranking: PrusaSlicer makes the final choice among the answers the slicer model ranks best.
 
-The search ranks poses by its estimate of the support. Near its optimum the
-estimate and the slicer can disagree about which of several good poses needs
-the least support. :func:`slice_rank` takes up to ``count`` distinct good poses
-(:func:`supportless.search.distinct_candidates`: the search's result first,
-then other local optima at least :data:`~supportless.search.DISTINCT_DEGREES`
-apart, none self-intersecting), slices each with and without supports
-(:func:`supportless.slicer.slice_support`, two at a time on two cores) and
-returns the one with the least support filament. The search's result is
-always one of them, so the choice is never worse by the slicer's measure.
+:func:`supportless.choice.choose` weighs the search's best against the
+simpler answers it met (the best pose printed as it stands, the best turned
+start pose) with the slicer model. :func:`slice_choice` takes the model's
+choice and the next answers by predicted support, up to ``count``, leaving
+out those predicted to need more than :data:`SLICE_WINDOW` of the rest pose's
+support beyond the least; slices them, two at a time on two cores, each once
+with supports (the support read from the G-code's support features,
+:func:`supportless.slicer.slice_support` with ``by_feature``), and returns the
+one PrusaSlicer lays the least support under. The model's choice is one of
+them, and it keeps the choice unless another answer is cheaper by more than
+:data:`SLICER_NOISE`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
+from .choice import KINDS, PER_KIND, Choice, candidate_answers, choose_by_model, pool_of, print_distance_deg, with_choice
 from .copyleft.cgal import self_intersects
 from .profile import PrinterProfile
+from .result import as_written
 from .rig import Rig
-from .search import (CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at,
-                     pose_distance_deg)
+from .search import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
 from .slicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
-__all__ = ["RankedResult", "candidate_result", "distinct_poses", "slice_rank"]
+__all__ = ["SLICER_NOISE", "SLICE_RANK", "SLICE_WINDOW", "distinct_poses", "pick_sliced", "slice_choice",
+           "slice_choice_if_found", "to_slice"]
+
+#: Answers sliced at most by default when PrusaSlicer is found (``--slice-rank``): one of each kind.
+SLICE_RANK = 3
+
+#: Answers predicted to need more support than the least by more than this
+#: share of the rest pose's predicted support are not sliced.
+SLICE_WINDOW = 0.15
+
+#: Another answer replaces the model's choice only when PrusaSlicer measures
+#: it cheaper by more than this share (its run-to-run and skirt noise).
+SLICER_NOISE = 0.01
 
 
-@dataclass
-class RankedResult:
-    """Outcome of :func:`slice_rank`.
+def to_slice(choice: Choice, count: int, window: float = SLICE_WINDOW) -> list[int]:
+    """Which answers of ``choice`` to slice: the model's choice, the best of each kind, then by predicted support.
 
-    Attributes
+    The slicer model ranks answers of one kind well and may misrank answers
+    of different kinds, so after the model's choice come the first answer of
+    each kind (the search's best of that kind; for turns, the one with the
+    least predicted support), then the others by predicted support. Answers
+    predicted above the least by more than ``window * choice.rest_mm``, and
+    answers that print like one already taken (:func:`print_distance_deg`
+    below :data:`DISTINCT_DEGREES`), are left out.
+
+    Parameters
     ----------
-    result : PoseResult
-        The chosen pose (the search's own result when it needs the least support).
-    chosen : int
-        Its position in ``entries`` (0 = the search's result).
-    entries : list of dict
-        One per sliced pose, in the search's order: ``rank`` (1 = the
-        search's best), ``value`` (objective), ``terms`` (normalised terms),
-        ``support_mm`` (PrusaSlicer's support filament), ``chosen`` (bool),
-        ``distance_deg`` (the largest rotation from the search's result).
-    sliced_seconds : float
-        Wall time of the slicing.
+    choice : Choice
+    count : int
+        How many at most (at least 1).
+    window : float
+
+    Returns
+    -------
+    indices : list of int
+        Positions in ``choice.candidates``, the model's choice first.
     """
+    if count < 1:
+        raise ValueError("count must be at least 1")
+    cands = choice.candidates
+    predicted = np.array([c.predicted_mm for c in cands])
+    limit = predicted.min() + float(window) * max(choice.rest_mm, 0.0)
+    by_support = [int(i) for i in np.argsort(predicted, kind="stable")]
+    heads = []
+    for kind in KINDS:  # candidates are in KINDS order, each kind best first; turns by predicted support
+        members = [i for i in range(len(cands)) if cands[i].kind == kind]
+        if kind == "turn":
+            members = [i for i in by_support if i in members]
+        heads += members[:1]
+    up = np.asarray(choice.up, np.float64)
+    picked = [choice.model_chosen]
+    for i in [*heads, *by_support]:
+        if len(picked) >= count:
+            break
+        a = cands[i].result
+        if predicted[i] <= limit and all(print_distance_deg(a.angles, a.rotation, cands[j].result.angles,
+                                                            cands[j].result.rotation, up) >= DISTINCT_DEGREES
+                                         for j in picked):
+            picked.append(i)
+    return picked
 
-    result: PoseResult
-    chosen: int
-    entries: list[dict]
-    sliced_seconds: float = 0.0
 
-    def to_dict(self) -> dict:
-        """The entries and the choice as JSON values (for the report)."""
-        return {"chosen_rank": self.chosen + 1, "sliced_seconds": round(self.sliced_seconds, 3),
-                "candidates": [dict(e) for e in self.entries]}
-
-
-def candidate_result(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.ndarray) -> PoseResult:
-    """``result`` with another pose and print rotation, measured with its objective.
+def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = 60.0,
+                 profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
+                 slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S, window: float = SLICE_WINDOW,
+                 per_kind: int = PER_KIND, slice_fn: Callable[..., object] | None = None) -> PoseResult:
+    """Slice the best few answers and return the one with the least support by PrusaSlicer.
 
     Parameters
     ----------
     rig : Rig
+        3D.
     result : PoseResult
-        The search's result (its objective measures the new pose).
-    angles : (m, 3) float64
-        Relative Euler angles, radians.
-    rotation : (d, d) float64
-        Print rotation.
+        A search's result; its :attr:`~PoseResult.choice` when it has one
+        (``orient="free"``), else its own distinct good poses are the answers.
+    count : int
+        How many answers to slice at most (:func:`to_slice`).
+    height_mm : float
+        The rest pose is scaled to this height; every answer by the same factor.
+    profile, config, slicer, timeout
+        As :func:`supportless.slicer.slice_check`.
+    workers : int
+        PrusaSlicer runs at a time (default 2: one per core here).
+    window : float
+        As :func:`to_slice`.
+    per_kind : int
+        As :func:`supportless.choice.candidate_answers`, when ``result`` has no choice yet.
+    slice_fn : callable, optional
+        Replaces :func:`supportless.slicer.slice_support` (same arguments,
+        returns an object with ``support_mm``: a list of floats), for tests.
 
     Returns
     -------
-    result : PoseResult
-        With ``angles``, ``rotation``, ``vertices``, ``print_vertices``,
-        ``value`` and ``terms`` of the new pose; the rest (history, settings,
-        stats) unchanged.
+    chosen : PoseResult
+        With a :class:`~supportless.choice.Choice` by ``"slicer"`` (by
+        ``"model"`` when only one answer was worth slicing: then nothing is
+        sliced), through :func:`supportless.result.as_written`.
+
+    Raises
+    ------
+    SlicerNotFound, SlicerError
+        As :func:`supportless.slicer.slice_support`.
     """
-    return measured_at(rig, result, angles, rotation)
+    choice = result.choice
+    if choice is None:
+        candidates, rest_mm = candidate_answers(rig, result, per_kind)
+        index, reason = choose_by_model(np.array([c.predicted_mm for c in candidates]),
+                                        np.array([c.result.value for c in candidates]), rest_mm)
+        choice = Choice(candidates, index, "model", reason, rest_mm, 60.0, up=np.asarray(rig.up, np.float64))
+    picked = to_slice(choice, count, window)
+    if len(picked) < 2:
+        reason = (f"{choice.reason}; no other answer is predicted within {100 * window:g} % of the rest pose's "
+                  "support: nothing to slice")
+        return as_written(rig, with_choice(choice.candidates[choice.chosen].result,
+                                           dataclasses.replace(choice, reason=reason)))
+    t0 = time.perf_counter()
+    scale = scale_for_height(rig.vertices, rig.up, height_mm)
+    poses = [choice.candidates[i].result for i in picked]
+    sliced = (slice_fn or slice_support)([(p.print_vertices, rig.faces) for p in poses], rig.up, scale, timeout,
+                                         config=config, workers=workers, slicer=slicer, profile=profile,
+                                         names=[f"answer-{i + 1}" for i in picked], by_feature=True)
+    candidates = [dataclasses.replace(c) for c in choice.candidates]
+    for i, mm in zip(picked, sliced.support_mm):
+        candidates[i].sliced_mm = float(mm)
+    chosen, reason = pick_sliced(picked, [candidates[i].sliced_mm for i in picked])
+    new = dataclasses.replace(choice, candidates=candidates, chosen=chosen, by="slicer", reason=reason,
+                              sliced_seconds=time.perf_counter() - t0, slicer_height_mm=float(height_mm))
+    return as_written(rig, with_choice(candidates[chosen].result, new))
+
+
+def pick_sliced(picked: list[int], support_mm: list[float], noise: float = SLICER_NOISE) -> tuple[int, str]:
+    """The slicer's choice among sliced answers.
+
+    Parameters
+    ----------
+    picked : list of int
+        The answers sliced (:func:`to_slice`), the model's choice first.
+    support_mm : list of float
+        PrusaSlicer's support filament of each, mm.
+    noise : float
+        The model's choice stays unless another is cheaper by more than this share.
+
+    Returns
+    -------
+    chosen : int
+        An entry of ``picked``.
+    reason : str
+    """
+    support = np.asarray(support_mm, np.float64)
+    best = int(np.argmin(support))
+    if support[best] < (1.0 - noise) * support[0]:
+        return picked[best], f"least PrusaSlicer support of {len(picked)} answers sliced ({support[best]:.0f} mm)"
+    if best == 0:
+        return picked[0], f"least PrusaSlicer support of {len(picked)} answers sliced ({support[0]:.0f} mm)"
+    return picked[0], (f"PrusaSlicer support {support[0]:.0f} mm, within {100 * noise:g} % of the least sliced "
+                       f"({support[best]:.0f} mm): the slicer model's choice kept")
 
 
 def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float = DISTINCT_DEGREES,
@@ -103,66 +209,45 @@ def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float 
     """
     if count < 1:
         raise ValueError("count must be at least 1")
-    cand = result.candidates or {}
-    if not len(cand.get("values", ())):  # a result without alternatives: itself only
-        cand = {"angles": result.angles[None], "rotations": result.rotation[None], "values": np.array([result.value])}
-    elif not (np.allclose(cand["angles"][0], result.angles) and np.allclose(cand["rotations"][0], result.rotation)):
-        cand = {"angles": np.concatenate([result.angles[None], cand["angles"]]),
-                "rotations": np.concatenate([result.rotation[None], cand["rotations"]]),
-                "values": np.concatenate([[result.value], cand["values"]])}
+    cand = pool_of(result, "pose and turn")
 
     def no_intersection(angles, _rotation):
         return rig.dim != 3 or not self_intersects(rig.pose(angles), rig.faces)
 
     picked = distinct_candidates(cand, count, min_degrees, tolerance, accept=no_intersection)
-    return [result] + [candidate_result(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
+    return [result] + [measured_at(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
 
 
-def slice_rank(rig: Rig, result: PoseResult, count: int, *, height_mm: float = 60.0,
-               profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
-               slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S,
-               min_degrees: float = DISTINCT_DEGREES, tolerance: float = CANDIDATE_TOLERANCE,
-               slice_fn: Callable[..., object] | None = None) -> RankedResult:
-    """Slice up to ``count`` distinct good poses and keep the one with the least support.
+def slice_choice_if_found(rig: Rig, result: PoseResult, height_mm: float = 60.0,
+                          on_failure: Callable[[str], None] | None = None) -> PoseResult:
+    """:func:`slice_choice` with :data:`SLICE_RANK` answers when PrusaSlicer is found, as the default makes it.
 
     Parameters
     ----------
     rig : Rig
     result : PoseResult
-        The search's result, with its :attr:`~PoseResult.candidates`.
-    count : int
-        How many poses to slice at most (the search's result included).
+        Returned as it is when it weighed no answers (``choice`` None), was
+        interrupted, or PrusaSlicer is not found.
     height_mm : float
-        The rest pose is scaled to this height; every pose by the same factor.
-    profile, config, slicer, timeout
-        As :func:`supportless.slicer.slice_check`.
-    workers : int
-        PrusaSlicer runs at a time (default 2: one per core here).
-    min_degrees, tolerance
-        As :func:`supportless.search.distinct_candidates`.
-    slice_fn : callable, optional
-        Replaces :func:`supportless.slicer.slice_support` (same arguments,
-        returns an object with ``support_mm``: a list of floats), for tests.
+        As :func:`slice_choice`.
+    on_failure : callable, optional
+        ``on_failure(message)`` when PrusaSlicer fails: the model's choice
+        stands. Without it the :class:`~supportless.errors.SlicerError` is raised.
 
     Returns
     -------
-    ranked : RankedResult
-
-    Raises
-    ------
-    SlicerNotFound, SlicerError
-        As :func:`supportless.slicer.slice_support`.
+    chosen : PoseResult
     """
-    poses = distinct_poses(rig, result, count, min_degrees, tolerance)
-    t0 = time.perf_counter()
-    scale = scale_for_height(rig.vertices, rig.up, height_mm)
-    sliced = (slice_fn or slice_support)([(p.print_vertices, rig.faces) for p in poses], rig.up, scale, timeout,
-                                         config=config, workers=workers, slicer=slicer, profile=profile,
-                                         names=[f"candidate-{i + 1}" for i in range(len(poses))])
-    seconds = time.perf_counter() - t0
-    support = [float(x) for x in sliced.support_mm]
-    chosen = int(np.argmin(support))  # the first of equals: the search's own order
-    entries = [{"rank": i + 1, "value": float(p.value), "terms": dict(p.terms), "support_mm": support[i],
-                "distance_deg": pose_distance_deg(p.angles, p.rotation, result.angles, result.rotation),
-                "chosen": i == chosen} for i, p in enumerate(poses)]
-    return RankedResult(result=poses[chosen], chosen=chosen, entries=entries, sliced_seconds=seconds)
+    from .errors import SlicerError
+    from .slicer import find_prusa_slicer
+
+    if result.choice is None or result.interrupted or not find_prusa_slicer():
+        return result
+    try:
+        return slice_choice(rig, result, SLICE_RANK, height_mm=height_mm)
+    except SlicerError as exc:
+        if on_failure is None:
+            raise
+        on_failure(str(exc))
+        return result
+

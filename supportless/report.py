@@ -169,7 +169,10 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         reads), ``print_frame`` (the files' frame and scale), the ``print_rotation`` and which ``frames``
         the figures are in, the largest and RMS vertex displacement, each
         bone's rotation (one angle, degrees) and the largest, the Euler
-        angles, runtime, settings and convergence history.
+        angles, runtime, settings and convergence history; ``choice``
+        (:meth:`supportless.choice.Choice.to_dict`: every answer weighed, its
+        kind, predicted and sliced support, and who chose which and why), or
+        None when the search's own best was returned unweighed.
 
         ``before`` is the rest pose as it stands; ``after`` is the found
         pose in its print orientation (support counted there), with
@@ -223,6 +226,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "largest_rotation_deg": float(turned.max()),
         "angles_deg": np.degrees(result.angles).round(4).tolist(),
         "runtime_seconds": float(result.runtime_seconds),
+        "choice": None if result.choice is None else result.choice.to_dict(),
         "interrupted": bool(result.interrupted),
         "settings": result.settings.to_dict() | {"fixed_bones": [int(b) + 1 for b in np.flatnonzero(result.fixed)]},
         "history": [float(v) for v in result.history],

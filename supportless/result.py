@@ -75,6 +75,15 @@ class PoseResult:
         ``angles`` (q, m, 3) float64, ``rotations`` (q, d, d) float64 and
         ``values`` (q,) float64 (objective values as the search measured them, :meth:`Objective.bounded`;
         not checked for exact self-intersection). See :func:`distinct_candidates`.
+    alternatives : dict of str -> dict
+        With ``orient="free"``, the simpler answers the search met on its
+        way, each in the form of ``candidates``: ``"pose"``, the pose phase's
+        best and other good poses, printed as they stand, and ``"turn"``,
+        the start pose upright and turned to each candidate printing direction
+        (:func:`supportless.orientation.seed_params`). Empty otherwise.
+    choice : supportless.choice.Choice or None
+        How the result was chosen among the search's best and the simpler
+        answers (:func:`supportless.choice.choose`), or None when it was not.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.build_report`): it measures the rest pose and
@@ -96,6 +105,8 @@ class PoseResult:
     rotation: np.ndarray | None = None
     print_vertices: np.ndarray | None = None
     candidates: dict = field(default_factory=dict)
+    alternatives: dict = field(default_factory=dict)
+    choice: object = None
 
     def __post_init__(self):
         if self.rotation is None:

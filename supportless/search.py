@@ -21,6 +21,7 @@ import numpy as np
 from .copyleft.cgal import self_intersects
 from .geometry import place_on_plate, print_pose
 from .interrupt import deferred_interrupt, requested
+from .choice import choose
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
@@ -367,13 +368,19 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     -------
     result : PoseResult
         Never worse than the rest pose (the rest pose is one of the particles).
-        On Ctrl-C the search stops after the iteration under way and returns
+        With ``orient="free"`` in 3D and ``settings.choose`` (the default),
+        the answer with the least predicted slicer support among the
+        search's best, the best pose printed as it stands and the best turned
+        start pose (:func:`supportless.choice.choose`; its ``choice`` says
+        which and why). On Ctrl-C the search stops after the iteration under way and returns
         its best so far with ``interrupted=True``
         (:func:`supportless.interrupt.deferred_interrupt`).
     """
     with deferred_interrupt():
         found = _optimize(rig, settings, objective=objective, start=start, start_rotation=start_rotation,
                           callback=callback, **changes)
+        if found.alternatives and found.settings.choose and rig.dim == 3 and not found.interrupted:
+            found = choose(rig, found)
     return as_written(rig, found)
 
 
@@ -494,11 +501,12 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
                                      callback=on_iteration, feasible=feasible, pass_bound=True, **options)
 
     initial = np.zeros((1, k)) if start is None else np.stack([np.zeros(k), layout.from_angles(base)])
-    swarm, history, turned = None, [], False
+    swarm, history, turned, pose_swarm = None, [], False, None
+    seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle) \
+        if turning and not _polish_only else None
     for phase, turns in enumerate(phases):
         if turns:
             o = variables(True)[0]
-            seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle)
             # the best pose so far first (upright, then at each candidate direction): the swarm keeps it, so
             # this phase never ends worse than the last
             poses = ([swarm.x] if swarm is not None else []) + [*initial]
@@ -512,6 +520,7 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
             particles = settings.particles
         swarm_now = run_phase(turns, initial, particles, phase * settings.iterations)
         history += list(swarm_now.history if not history else swarm_now.history[1:])
+        pose_swarm = pose_swarm if turns else swarm_now
         swarm, turned = swarm_now, turns
         if swarm.interrupted:
             break
@@ -537,6 +546,11 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     angles = to_angles(swarm.x[None])[0]
     rotation = to_rotation(swarm.x)
     candidates = _candidates(swarm, to_angles, to_rotation)
+    alternatives = {}
+    if seeds is not None:  # the simpler answers met on the way, for supportless.choice
+        if pose_swarm is not None and turned:
+            alternatives["pose"] = _candidates(pose_swarm, *variables(False)[1:])
+        alternatives["turn"] = _turned(objective, base, seeds, rig.up)
     posed = place_on_plate(rig.pose(angles), rig.up)
     value, terms, _ = objective.evaluate(angles, rotation if turned else None)  # the rig's own weights
     terms = {key: float(v) for key, v in terms.items()}
@@ -545,7 +559,17 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
                       fixed=fixed, term_history=term_history, runtime_seconds=time.perf_counter() - t0,
                       stats=stats, rotation=rotation,
                       print_vertices=print_pose(posed, rotation, rig.up) if turned else posed,
-                      candidates=candidates)
+                      candidates=candidates, alternatives=alternatives)
+
+
+def _turned(objective: Objective, angles: np.ndarray, seeds: np.ndarray, up: np.ndarray) -> dict:
+    """A pose upright and turned to each printing direction of ``seeds``, best first (as :func:`_candidates`)."""
+    d = len(up)
+    rotations = np.concatenate([np.eye(d)[None], rotations_from_params(seeds, up)]) if len(seeds) else np.eye(d)[None]
+    A = np.repeat(angles[None], len(rotations), axis=0)
+    values = np.asarray(objective(A, rotations), np.float64)
+    order = np.argsort(values, kind="stable")
+    return {"angles": A[order], "rotations": rotations[order], "values": values[order]}
 
 
 def _candidates(swarm: SwarmResult, to_angles, to_rotation) -> dict:

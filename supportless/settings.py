@@ -137,6 +137,11 @@ class SearchSettings:
         ``free``: search the print orientation with the pose (support is
         counted with the posed model turned by a rotation R,
         :mod:`supportless.orientation`); ``keep``: print as the model stands.
+    choose : bool
+        With ``orient="free"`` (3D), return the answer with the least
+        predicted slicer support among the search's best, the best pose
+        printed as it stands and the best turned start pose
+        (:func:`supportless.choice.choose`); False: the search's best.
     orient_seeds : int
         With ``orient="free"``, particles started (at the rest pose) at this
         many of the best-ranked candidate printing directions.
@@ -178,6 +183,7 @@ class SearchSettings:
     symmetric: bool = False
     orient: str = "free"
     orient_seeds: int = ORIENT_SEEDS
+    choose: bool = True
     support_floor: float = 0.0
     minor_share: float = MINOR_SHARE
     clusters: int | None = 100

@@ -32,7 +32,8 @@ from typing import Mapping, Sequence, Union
 import numpy as np
 
 from .errors import InputError, SlicerError
-from .gcode import FILAMENT_DIAMETER_MM, mm_to_cm3, parse_filament_used, parse_print_time, read_gcode_tail
+from .gcode import (FILAMENT_DIAMETER_MM, SUPPORT_FEATURES, feature_filament, mm_to_cm3, parse_filament_used,
+                    parse_print_time, read_gcode_tail)
 from .io import check_mesh_arrays, read_mesh, write_mesh
 from .printframe import place_vertices, rotation_to_z
 from .profile import DEFAULT_DENSITY, PrinterProfile
@@ -392,7 +393,8 @@ class SupportSlices:
 def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float, timeout: float = DEFAULT_TIMEOUT_S,
                   *, config: Mapping[str, str] | str | None = None, workers: int | None = None,
                   slicer: str | None = None, keep_dir: str | os.PathLike | None = None,
-                  profile: PrinterProfile | None = None, names: Sequence[str] | None = None) -> SupportSlices:
+                  profile: PrinterProfile | None = None, names: Sequence[str] | None = None,
+                  by_feature: bool = False) -> SupportSlices:
     """Slice meshes with and without supports; the support filament of each.
 
     Parameters
@@ -410,6 +412,12 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         As in :func:`slice_check`.
     names : sequence of str, optional
         Labels of the meshes in file names and messages (default ``mesh-0`` ...).
+    by_feature : bool
+        Slice each mesh once, with supports, and read the support filament
+        from the G-code's support features (:func:`~supportless.gcode.feature_filament`)
+        instead of the difference with a slice without supports: half the
+        PrusaSlicer runs. The two agree within the skirt's few mm (the bunny
+        at 60 mm: 3345 mm against 3360 mm).
 
     Returns
     -------
@@ -460,7 +468,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         for label, (V, F) in zip(names, placed):
             stl = work / f"{label}.stl"
             write_mesh(stl, V, F)
-            for support in (True, False):
+            for support in (True,) if by_feature else (True, False):
                 gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
                 cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
                        "--output", str(gcode), str(stl)]
@@ -470,14 +478,21 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         for j in jobs:
             tail = read_gcode_tail(j.gcode)
             mm, cm3 = parse_filament_used(tail)
-            runs.append({"filament_mm": mm, "filament_cm3": cm3, "print_seconds": parse_print_time(tail),
-                         "seconds": round(j.elapsed, 3)})
+            run = {"filament_mm": mm, "filament_cm3": cm3, "print_seconds": parse_print_time(tail),
+                   "seconds": round(j.elapsed, 3)}
+            if by_feature:
+                features = feature_filament(j.gcode.read_text(errors="replace"))
+                run["support_features_mm"] = sum(features.get(name, 0.0) for name in SUPPORT_FEATURES)
+            runs.append(run)
     out = []
     for i, (V, _) in enumerate(placed):
+        size = [float(x) for x in np.ptp(V, axis=0)]
+        if by_feature:
+            out.append({"support": runs[i], "support_mm": runs[i]["support_features_mm"], "size_mm": size})
+            continue
         with_, without = runs[2 * i], runs[2 * i + 1]
         out.append({"support": with_, "nosupport": without,
-                    "support_mm": with_["filament_mm"] - without["filament_mm"],
-                    "size_mm": [float(x) for x in np.ptp(V, axis=0)]})
+                    "support_mm": with_["filament_mm"] - without["filament_mm"], "size_mm": size})
     return SupportSlices(meshes=out, slicer=exe, config=cfg)
 
 

@@ -17,7 +17,8 @@ def stand_in_slicer(support):
     """A stand-in PrusaSlicer script: reads the binary STL it is given and writes G-code comments.
 
     ``support`` is a Python expression of ``rec["v"]`` ((n, 3, 3) float32 triangle corners) and ``np``:
-    the support filament (mm) it reports with ``--support-material`` (none without), on top of 1000 mm.
+    the support filament (mm) it reports with ``--support-material`` (none without), on top of 1000 mm:
+    in the summary line and as a ``;TYPE:Support material`` extrusion (after a retraction and its undoing).
     """
     return f"""\
 import sys
@@ -30,5 +31,8 @@ raw = open(stl, "rb").read()
 n = int(np.frombuffer(raw[80:84], "<u4")[0])
 rec = np.frombuffer(raw[84:84 + 50 * n], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
 support = ({support}) if "--support-material" in args else 0.0
-open(out, "w").write(f"; filament used [mm] = {{1000.0 + support!r}}\\n; filament used [cm3] = 2.5\\n")
+body = "M82\\nG92 E0\\n;TYPE:Perimeter\\nG1 X1 Y1 E1000.0\\n"
+if support:
+    body += f";TYPE:Support material\\nG1 E999.2\\nG1 E1000.0\\nG1 X2 Y2 E{{1000.0 + support!r}}\\n"
+open(out, "w").write(body + f"; filament used [mm] = {{1000.0 + support!r}}\\n; filament used [cm3] = 2.5\\n")
 """

@@ -360,7 +360,7 @@ def _demo_meshes(tmp_path):
     import supportless
 
     rig = supportless.load_rig("demo:branch", cache_dir=tmp_path / "cache")
-    res = supportless.optimize(rig, particles=12, iterations=6, seed=0)
+    res = supportless.optimize(rig, particles=12, iterations=6, seed=0, orient="keep")  # a new pose, standing
     supportless.write_mesh(tmp_path / "rest.stl", rig.vertices, rig.faces)
     supportless.write_mesh(tmp_path / "posed.stl", res.vertices, rig.faces)
     return tmp_path / "rest.stl", tmp_path / "posed.stl"
@@ -440,3 +440,34 @@ def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path
     assert r.config == profile.raw and r.profile == profile.path
     d = r.to_dict()
     assert d["before"]["support_g"] == r.support_g_before and d["after"]["support_time_s"] == 1500.0
+
+
+def test_feature_filament_counts_extrusion_per_feature_absolute_and_relative():
+    """Hand-counted G-code: retractions and their undoing, travel and resets are not filament laid down."""
+    from supportless.gcode import feature_filament
+
+    absolute = ("M82\nG92 E0\nG1 X0 Y0 E2.0\n;TYPE:Perimeter\nG1 X1 Y0 E5.0\nG1 E4.2 ; retract\n"
+                "G1 X5 Y5 F9000\nG1 E5.0 ; unretract\n;TYPE:Support material\nG1 X2 Y2 E7.5\n"
+                "G92 E0\nG1 X3 Y3 E1.25 ; after a reset\n;TYPE:Support material interface\nG1 Y4 E2.0\n")
+    got = feature_filament(absolute)
+    assert got == pytest.approx({"": 2.0, "Perimeter": 3.0, "Support material": 3.75,
+                                 "Support material interface": 0.75})
+    relative = ("M83\n;TYPE:Perimeter\nG1 X1 Y0 E3.0\nG1 E-0.8\nG1 E0.8\n;TYPE:Support material\n"
+                "G1 X2 Y2 E2.5 ; comment E9\nG1 X3 E1.25\n")
+    assert feature_filament(relative) == pytest.approx({"Perimeter": 3.0, "Support material": 3.75})
+    assert feature_filament("; no moves\n") == {}
+
+
+def test_support_by_feature_agrees_with_the_difference_of_two_slices(prusa_slicer):
+    """PrusaSlicer: one slice read by feature gives the support of with-minus-without to the skirt's few mm."""
+    from supportless.slicer import scale_for_height, slice_support
+
+    V, F = _gamma_mesh()  # the arm out: it needs support
+    up = (0.0, 1.0, 0.0)
+    scale = scale_for_height(V, up, 30.0)
+    two = slice_support([(V, F)], up, scale, config="fast")
+    one = slice_support([(V, F)], up, scale, config="fast", by_feature=True)
+    assert "nosupport" not in one.meshes[0] and two.support_mm[0] > 50.0
+    assert one.support_mm[0] == pytest.approx(two.support_mm[0], rel=0.03, abs=5.0)
+    # the features sum to the file's own total
+    assert one.meshes[0]["support"]["filament_mm"] == pytest.approx(two.meshes[0]["support"]["filament_mm"], rel=1e-9)

@@ -238,7 +238,7 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
     state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 10.0])
     start = state.get_angles()
     start_value = float(state.objective(start))
-    assert state.start_optimize(particles=10, iterations=4, seed=2)
+    assert state.start_optimize(particles=10, iterations=4, seed=2, choose=False)  # the search's own best
     assert not state.start_optimize()  # one search at a time
     assert state.wait_optimize(300)
     result = state.last_result
@@ -483,3 +483,21 @@ def test_the_front_slider_sets_the_pose_and_rotation(tpose_rig, tmp_path):
         np.testing.assert_array_equal(state.get_angles(), front.poses[-2].result.angles)
     with pytest.raises(ValueError, match="not within"):
         browser.show(len(front.poses))
+
+
+@pytest.mark.parametrize("slicer", [True, False])
+def test_optimize_makes_the_command_line_choice(state, tmp_path, monkeypatch, slicer):
+    """The panel's Optimize weighs the same answers as ``supportless optimize``: PrusaSlicer chooses when found."""
+    from slicers import fake_exe, stand_in_slicer
+
+    exe = fake_exe(tmp_path, "stand-in-slicer", stand_in_slicer("float(np.ptp(rec['v'][..., 0]))")) if slicer \
+        else str(tmp_path / "missing")
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", exe)
+    assert state.start_optimize(particles=10, iterations=4, seed=2)
+    assert state.wait_optimize(300)
+    result = state.last_result
+    assert result.choice is not None and result.choice.by == ("slicer" if slicer else "model")
+    chosen = result.choice.candidates[result.choice.chosen].result
+    angles, R = state.get_pose()
+    assert np.array_equal(angles, chosen.angles) and np.array_equal(R, chosen.rotation)
+    assert any(c.sliced_mm is not None for c in result.choice.candidates) == slicer

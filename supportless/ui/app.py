@@ -325,8 +325,13 @@ class App:
                 word = "cancelled" if result.interrupted else "finished"
                 degrees = rotation_axis_angle(result.rotation)[1]
                 turn = f"printed turned {degrees:.0f}°" if abs(degrees) >= 0.05 else "printed as it stands"
+                chosen = ""
+                if result.choice is not None:
+                    c = result.choice
+                    who = "PrusaSlicer" if c.by == "slicer" else "the slicer model"
+                    chosen = f"; answer: {c.candidates[c.chosen].kind}, chosen by {who} ({c.reason})"
                 self._set_status(f"search {word} after {result.runtime_seconds:.1f} s: objective "
-                                 f"{result.value:.4g}, {turn}; keep editing, or Undo to go back")
+                                 f"{result.value:.4g}, {turn}{chosen}; keep editing, or Undo to go back")
         self._request_render()
 
     def _set_status(self, text: str) -> None:

@@ -333,6 +333,9 @@ class Panel:
     def show_progress(self, progress: dict) -> None:
         """Progress bar and best objective of the running search."""
         it, total, value = progress["iteration"], progress["iterations"], progress["value"]
+        if progress.get("phase"):  # after the search: PrusaSlicer chooses among its answers
+            self.show_status(f"{progress['phase']} with PrusaSlicer ...")
+            return
         self.progress.value = 100.0 * it / max(total, 1)
         self.search_info.content = f"iteration {it} / {total} · best objective {_fmt(value)}"
         self.show_status(f"searching, iteration {it} / {total}, best objective {_fmt(value)}")

@@ -1,39 +1,32 @@
 """The viewer's editing state, without a browser or a server.
 
-:class:`EditorState` holds what the page edits and shows: the current pose
-and print rotation, the selected bone, undo/redo, the search settings (one
-:class:`~supportless.settings.SearchSettings`), the objective they define, the
-measures of a pose, pose and mesh files, and the pose search running in the
-background. The web app (:mod:`supportless.ui.app`) draws it and forwards the
-page's events to it; tests drive it directly.
+:class:`EditorState` holds what the page edits and shows: the current pose and print rotation, the
+selected bone, undo/redo, the search settings (one :class:`~supportless.settings.SearchSettings`), the
+objective they define, the measures of a pose, pose and mesh files, and the pose search running in the
+background. The web app (:mod:`supportless.ui.app`) draws it and forwards the page's events to it.
 
-Actions raise on bad input (:class:`~supportless.errors.SupportlessError`,
-``OSError``, ``ValueError``) and leave the state as it was; the app turns the
-exception into a message in the page.
+Actions raise on bad input (:class:`~supportless.errors.SupportlessError`, ``OSError``, ``ValueError``) and
+leave the state as it was; the app turns the exception into a message in the page.
 
-Two frames (see :mod:`supportless.orientation`): the pose *standing* as the
-input stood (the display frame, where the bones are edited) and the pose *as
-printed*, turned by the print rotation R the search chose and put on the
-plate (:func:`supportless.geometry.print_pose`). The support figures are
-counted as printed; contact, balance and distortion are judged standing.
+Two frames (see :mod:`supportless.orientation`): the pose *standing* as the input stood (the display frame,
+where the bones are edited) and the pose *as printed*, turned by the print rotation R the search chose and
+put on the plate (:func:`supportless.geometry.print_pose`). The support figures are counted as printed;
+contact, balance and distortion are judged standing.
 
-Every change is announced to the
-listeners given to :meth:`EditorState.subscribe` as ``listener(event, **info)``:
+Every change is announced to the listeners of :meth:`EditorState.subscribe` as ``listener(event, **info)``:
 
 ``"pose"``
     The angles or the print rotation changed (``origin``: who changed them, e.g. ``"slider"``,
     ``"gizmo"``, ``"search"``, or None).
-``"selection"``
-    Another bone is selected.
-``"settings"``
-    The search settings, and with them the objective and fixed bones, changed.
+``"selection"``, ``"settings"``
+    Another bone is selected; the search settings, and with them the objective and fixed bones, changed.
 ``"search_started"``
     A search starts (see ``search_settings`` and ``progress``).
 ``"progress"``
-    The running search finished an iteration (see ``progress``).
+    The running search finished an iteration, or PrusaSlicer is choosing among its answers
+    (``progress["phase"]``, :func:`supportless.ranking.slice_choice_if_found`).
 ``"search_done"``
-    The search ended (``result``: its :class:`~supportless.search.PoseResult`,
-    or ``error``: the exception it raised).
+    The search ended (``result``: its :class:`~supportless.search.PoseResult`, or ``error``: what it raised).
 """
 
 from __future__ import annotations
@@ -56,6 +49,8 @@ from ..kinematics import matrix_to_euler
 from ..objective import Objective
 from ..orientation import print_direction, rotation_axis_angle
 from ..report import pose_measures, reduction
+from ..ranking import slice_choice_if_found
+from ..slicer import find_prusa_slicer
 from ..search import PoseResult, optimize
 from ..settings import SearchSettings
 from ..printframe import PrintFrame, rig_print_frame
@@ -672,6 +667,12 @@ class EditorState:
         try:
             result = optimize(self.rig, settings, objective=objective, start=start, start_rotation=start_rotation,
                               callback=callback)
+            if result.choice is not None and not self._cancel.is_set() and find_prusa_slicer():  # as optimize does
+                with self._lock:
+                    self.progress["phase"] = "slicing the best answers"
+                self._notify("progress")
+                result = slice_choice_if_found(self.rig, result, self.print_frame.height_mm, on_failure=lambda why: (
+                    logger.warning("slicing the answers failed, the slicer model's choice is kept: %s", why)))
         except Exception as exc:  # noqa: BLE001 - reported to the listeners, the app keeps running
             logger.exception("pose search failed")
             with self._lock:
@@ -683,6 +684,7 @@ class EditorState:
             self._rotation = np.array(result.rotation, np.float64)
             self.last_result = result
             self.progress.update(running=False, cancelled=bool(result.interrupted), value=result.value)
+            self.progress.pop("phase", None)
         self._notify("pose", origin="search")
         self._notify("search_done", result=result)
 

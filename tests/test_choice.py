@@ -1,0 +1,85 @@
+"""The default answer: the search's best weighed against the simpler answers by predicted support."""
+
+import json
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless.choice import KINDS, choose_by_model, print_distance_deg
+from supportless.kinematics import euler_to_matrix
+from supportless.report import build_report
+
+SMALL = {"particles": 40, "iterations": 15, "seed": 1}
+
+
+@pytest.fixture(scope="module")
+def found(branch_rig):
+    return sl.optimize(branch_rig, **SMALL)
+
+
+def test_every_kind_of_answer_is_weighed_and_reported(branch_rig, found):
+    choice = found.choice
+    assert choice is not None and choice.by == "model"
+    assert {c.kind for c in choice.candidates} == set(KINDS)
+    assert choice.candidates[0].kind == "pose and turn"
+    assert found.stats["chosen_kind"] == choice.candidates[choice.chosen].kind
+    np.testing.assert_allclose(found.angles, choice.candidates[choice.chosen].result.angles)
+    np.testing.assert_allclose(found.rotation, choice.candidates[choice.chosen].result.rotation)
+    report = json.loads(json.dumps(build_report(branch_rig, found)))
+    entries = report["choice"]["candidates"]
+    assert [e["kind"] for e in entries] == [c.kind for c in choice.candidates]
+    assert sum(e["chosen"] for e in entries) == 1 and entries[choice.chosen]["chosen"]
+    assert report["choice"]["by"] == "model" and report["choice"]["reason"]
+    assert all(e["sliced_mm"] is None for e in entries)
+    # the chosen answer's predicted support is the report's prediction for the written pose (a second path)
+    assert entries[choice.chosen]["predicted_mm"] == pytest.approx(report["predicted_slicer"]["after_mm"], abs=0.1)
+    assert report["choice"]["rest_predicted_mm"] == pytest.approx(report["predicted_slicer"]["before_mm"], abs=0.1)
+
+
+def test_the_simpler_answers_are_what_they_say(branch_rig, found):
+    kinds = {}
+    for c in found.choice.candidates:
+        kinds.setdefault(c.kind, []).append(c.result)
+    for r in kinds["pose"]:  # printed as the model stands
+        np.testing.assert_allclose(r.rotation, np.eye(3), atol=1e-12)
+    for r in kinds["turn"]:  # the rest pose, turned
+        np.testing.assert_allclose(r.angles, 0.0, atol=1e-12)
+    # the pose phase's best is the pose-only search's answer (same swarm, same seed)
+    keep = sl.optimize(branch_rig, orient="keep", **SMALL)
+    np.testing.assert_allclose(kinds["pose"][0].angles, keep.angles, atol=1e-9)
+    assert kinds["pose"][0].value == pytest.approx(keep.value, rel=1e-9)
+
+
+def test_choose_false_is_the_search_best(branch_rig, found):
+    plain = sl.optimize(branch_rig, choose=False, **SMALL)
+    assert plain.choice is None
+    first = found.choice.candidates[0].result
+    np.testing.assert_allclose(plain.angles, first.angles)
+    np.testing.assert_allclose(plain.rotation, first.rotation)
+    assert plain.value <= min(c.result.value for c in found.choice.candidates) + 1e-12
+
+
+def test_keep_searches_weigh_nothing(branch_rig):
+    assert sl.optimize(branch_rig, orient="keep", particles=10, iterations=3).choice is None
+
+
+def test_model_choice_least_predicted_unless_a_tie_is_better_by_the_objective():
+    predicted, values = np.array([100.0, 90.0, 95.0]), np.array([1.0, 3.0, 2.0])
+    assert choose_by_model(predicted, values, 1000.0, 0.0)[0] == 1
+    index, reason = choose_by_model(predicted, values, 1000.0, 0.006)  # a window of 6 mm: 90 and 95 tie
+    assert index == 2 and "lower objective" in reason
+    assert choose_by_model(predicted, values, 1000.0, 0.2)[0] == 0  # all tie: the least objective
+    assert choose_by_model(predicted, values, 0.0, 0.2)[0] == 1  # no rest support: no window
+
+
+def test_print_distance_ignores_a_spin_on_the_plate():
+    up = np.array([0.0, 1.0, 0.0])
+    A = np.zeros((2, 3))
+    spin = euler_to_matrix(np.array([0.0, 0.7, 0.0]))  # about +Y, the up direction
+    tilt = euler_to_matrix(np.array([np.radians(30.0), 0.0, 0.0]))
+    assert print_distance_deg(A, np.eye(3), A, spin, up) == pytest.approx(0.0, abs=1e-6)
+    assert print_distance_deg(A, np.eye(3), A, tilt, up) == pytest.approx(30.0, abs=1e-6)
+    bent = A.copy()
+    bent[1, 2] = np.radians(45.0)
+    assert print_distance_deg(A, spin, bent, spin, up) == pytest.approx(45.0, abs=1e-6)
