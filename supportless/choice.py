@@ -245,8 +245,10 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     V = np.stack([place_on_plate(rig.vertices, up)] + [r.print_vertices for _, r, _ in picked])
     predicted = predicted_support_mm(V, rig.faces, up, float(result.settings.overhang_angle), scale)
     candidates = [Candidate(kind, r, float(p), same_as=j) for (kind, r, j), p in zip(picked, predicted[1:])]
-    turns = sorted([c for c in candidates if c.kind == "turn"], key=lambda c: c.predicted_mm)
-    dropped = {id(c) for c in turns[per_kind:]}
+    # the turns with the least predicted support, and the one the search's objective likes best (the first)
+    turns = [c for c in candidates if c.kind == "turn"]
+    kept_turns = {id(c) for c in sorted(turns, key=lambda c: c.predicted_mm)[:per_kind]} | {id(c) for c in turns[:1]}
+    dropped = {id(c) for c in turns if id(c) not in kept_turns}
     kept = [c for c in candidates if id(c) not in dropped]
     position = {id(c): i for i, c in enumerate(kept)}
     for c in kept:  # same_as pointed into the list before the extra turns were dropped

@@ -229,7 +229,7 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=0), default=None,
               help="Slice up to K of the best answers (the search's, the best pose as it stands, the best turned "
                    "rest pose; by predicted support) with PrusaSlicer, two at a time, and keep the one with the "
-                   "least support. Default: 2 when PrusaSlicer is found, else the slicer model chooses. "
+                   "least support. Default: 4 when PrusaSlicer is found, else the slicer model chooses. "
                    "0: no choice, the search's own best.")
 @click.option("--pareto", "pareto_count", type=click.IntRange(min=2), default=None,
               help="Also return up to N poses along the front of least support against least distortion: "

@@ -550,7 +550,9 @@ def _optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Ob
     if seeds is not None:  # the simpler answers met on the way, for supportless.choice
         if pose_swarm is not None and turned:
             alternatives["pose"] = _candidates(pose_swarm, *variables(False)[1:])
-        alternatives["turn"] = _turned(objective, base, seeds, rig.up)
+        # the start pose turned: the search's directions and those ranked at the printer's own threshold
+        at_threshold = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, settings.overhang_angle)
+        alternatives["turn"] = _turned(objective, base, np.concatenate([seeds, at_threshold]), rig.up)
     posed = place_on_plate(rig.pose(angles), rig.up)
     value, terms, _ = objective.evaluate(angles, rotation if turned else None)  # the rig's own weights
     terms = {key: float(v) for key, v in terms.items()}
