@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Callable
 
 from .errors import InputError, SupportlessError
+from .interrupt import pause_point
 from .io import MESH_FORMATS, atomic_path, write_json
 
 __all__ = ["COLUMNS", "ModelSpec", "find_models", "finished_row", "run_batch", "run_model", "write_contact_sheet",
@@ -39,8 +40,8 @@ __all__ = ["COLUMNS", "ModelSpec", "find_models", "finished_row", "run_batch", "
 COLUMNS = ("model", "status", "reason", "predicted_before_mm", "predicted_after_mm", "predicted_reduction",
            "slicer_before_mm", "slicer_after_mm", "slicer_reduction", "distortion", "seconds")
 
-#: Environment of each local worker: one thread for numba and the BLAS, as each worker is one core.
-WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+#: Environment of each local worker: one thread for the BLAS, as each worker is one core (numba's: :func:`_one_numba_thread`).
+WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 
 @dataclass(frozen=True)
@@ -107,6 +108,29 @@ def _row_of(future, name: str) -> dict:
                              "TetGen or CGAL, on this model)", 0.0)
 
 
+def _umask() -> int:
+    """The process's file-creation mask (read by setting it, then put back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _one_numba_thread() -> None:
+    """Use one numba thread in this worker, whatever numba started with.
+
+    Numba reads ``NUMBA_NUM_THREADS`` again at every compilation and refuses a
+    value other than the one its threads were launched with; a Dask worker may
+    have launched them before its environment was set (a kernel compiled for
+    the first time, e.g. a 2D model after a 3D run filled the cache, then
+    failed). The variable is set to what numba has, and the thread count
+    lowered with :func:`numba.set_num_threads` instead.
+    """
+    import numba
+
+    os.environ["NUMBA_NUM_THREADS"] = str(numba.config.NUMBA_NUM_THREADS)
+    numba.set_num_threads(1)
+
+
 def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_mm: float | None = None,
               cache_dir: str | None = None, slice_check: bool = False) -> dict:
     """Pose one model and write ``out/NAME/``; the Dask task. Never raises: a failure is a row.
@@ -136,12 +160,15 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
     t0 = time.perf_counter()
     if spec.problem:
         return _failed(spec.name, spec.problem, 0.0)
+    _one_numba_thread()
     final = Path(out) / spec.name
     work = Path(tempfile.mkdtemp(prefix=f".{spec.name}.", dir=out))
+    os.chmod(work, 0o777 & ~_umask())  # mkdtemp's 0700 would become the model folder's
     try:
         row = _pose_into(spec, work, settings, up, height_mm, cache_dir, slice_check)
         row["seconds"] = round(time.perf_counter() - t0, 2)
         write_json(work / "row.json", row)
+        pause_point(f"rename {spec.name}/")
         if final.exists():  # --force: the old result goes only once the new one is complete
             old = Path(tempfile.mkdtemp(prefix=f".{spec.name}.old.", dir=out))
             os.replace(final, old / spec.name)

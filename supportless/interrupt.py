@@ -6,16 +6,20 @@ with it. Inside :func:`deferred_interrupt` the first Ctrl-C only sets a flag;
 long loops (the search's iterations) read it with :func:`requested` between
 steps and stop cleanly, so their best result is still returned and written. A
 second Ctrl-C raises ``KeyboardInterrupt`` as usual, for a user who does not
-want to wait.
+want to wait. For the tests, :func:`pause_point` stops a run at a named step
+so that it can be killed exactly there.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
+import time
+from pathlib import Path
 
-__all__ = ["deferred_interrupt", "request", "requested"]
+__all__ = ["PAUSE_ENV", "deferred_interrupt", "pause_point", "request", "requested"]
 
 _state = {"requested": False, "depth": 0}
 
@@ -58,3 +62,23 @@ def deferred_interrupt():
         _state["depth"] -= 1
         if install:
             signal.signal(signal.SIGINT, previous)
+
+
+#: Names a point where a run stops for a test to kill it there: ``POINT=FILE`` (:func:`pause_point`).
+PAUSE_ENV = "SUPPORTLESS_PAUSE_AT"
+
+
+def pause_point(name: str) -> None:
+    """Block here for good when ``$SUPPORTLESS_PAUSE_AT`` is ``name=FILE``, after creating FILE.
+
+    A test kills a run at a known step (a model's folder or the contact
+    sheet about to be renamed into place) instead of after a delay, so its
+    verdict never depends on timing. Unset, as it always is outside the
+    tests, it costs one environment lookup.
+    """
+    point, _, marker = os.environ.get(PAUSE_ENV, "").partition("=")
+    if point != name or not marker:
+        return
+    Path(marker).touch()
+    while True:
+        time.sleep(3600)

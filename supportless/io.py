@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .interrupt import pause_point
 from .skeleton import check_skeleton
 from .threemf import write_3mf
 
@@ -60,6 +61,7 @@ def atomic_path(path: str | os.PathLike):
     try:
         yield tmp
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
+        pause_point(f"rename {path.name}")
         os.replace(tmp, path)
     finally:
         if tmp.exists():

@@ -133,28 +133,68 @@ def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
                     p.kill()
 
 
-def test_killing_a_run_midway_leaves_no_model_that_looks_finished(folder, tmp_path):
-    out = tmp_path / "out"
-    slow = ["--particles", "40", "--iterations", "30", "--orient", "keep"]
+@pytest.mark.parametrize("point", ["rename arm/", "rename branch/", "rename contact_sheet.png",
+                                   "rename summary.csv"])
+def test_killing_a_run_at_each_step_leaves_no_model_that_looks_finished(folder, tmp_path, point):
+    """The run stops at a chosen step (``SUPPORTLESS_PAUSE_AT``), is killed there, and a rerun completes it.
+
+    The steps: a model's scratch folder about to become its folder, the contact sheet and the summary about to
+    be renamed into place. The kill lands at the step, not after a delay: the verdict never depends on timing.
+    """
+    from supportless.interrupt import PAUSE_ENV
+
+    out, marker = tmp_path / "out", tmp_path / "paused"
     proc = subprocess.Popen([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
-                             "--cache-dir", str(tmp_path / "cache"), *slow],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and not (out / "summary.csv").is_file():
-        time.sleep(0.2)
-    time.sleep(1.0)
-    os.killpg(proc.pid, signal.SIGKILL)  # the whole run, workers included, at once
-    proc.wait(timeout=30)
+                             "--cache-dir", str(tmp_path / "cache"), *FAST],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+                            env=dict(os.environ, **{PAUSE_ENV: f"{point}={marker}"}))
+    try:
+        for _ in range(6000):  # the run reaches the step (or ends: then the test fails below)
+            if marker.exists() or proc.poll() is not None:
+                break
+            time.sleep(0.1)
+        assert marker.exists(), f"the run never reached {point!r}"
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the whole run, workers included, at once
+        proc.wait(timeout=30)
     for folder_ in (p for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")):
         _check_outputs(out, [folder_.name])  # any model folder there is complete
+    left = sorted(p.name for p in out.iterdir() if p.name.startswith("."))
+    assert left, "the kill at the step leaves the step's scratch behind"
     rerun = subprocess.run([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
                             "--cache-dir", str(tmp_path / "cache"), *FAST], capture_output=True, text=True,
                            timeout=600)
-    assert rerun.returncode == 1, rerun.stderr
+    assert rerun.returncode == 1, rerun.stderr  # broken and lonely fail
     rows = _summary(out)
     assert rows["arm"]["status"] == rows["branch"]["status"] == "ok"
     _check_outputs(out, ["arm", "branch"])
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # the killed run's scratch is cleared
+    assert (out / "contact_sheet.png").is_file()
+    assert not [p for p in out.iterdir() if p.name.startswith(".")], left  # the killed run's scratch is cleared
+    mask = os.umask(0o022)
+    os.umask(mask)
+    assert (out / "arm").stat().st_mode & 0o777 == 0o777 & ~mask  # the umask's mode, not mkdtemp's 0700
+
+
+def test_a_worker_uses_one_numba_thread_and_numba_accepts_its_environment_again():
+    """A batch worker lowers numba's threads without changing what numba started with (a compilation
+    re-reads NUMBA_NUM_THREADS and refuses a different value once its threads run)."""
+    import numba
+
+    from supportless.batch import _one_numba_thread
+
+    before, env = numba.get_num_threads(), os.environ.get("NUMBA_NUM_THREADS")
+    try:
+        os.environ["NUMBA_NUM_THREADS"] = str(numba.config.NUMBA_NUM_THREADS + 1)  # as a worker's env could say
+        _one_numba_thread()
+        assert numba.get_num_threads() == 1
+        numba.core.config.reload_config()  # what each compilation does: no "Cannot set NUMBA_NUM_THREADS"
+        numba.njit(lambda x: x + 1)(1)
+    finally:
+        numba.set_num_threads(before)
+        if env is None:
+            os.environ.pop("NUMBA_NUM_THREADS", None)
+        else:
+            os.environ["NUMBA_NUM_THREADS"] = env
 
 
 def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback():

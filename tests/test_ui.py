@@ -8,6 +8,7 @@ The browser test saves a screenshot to ``test-artifacts/ui.png``.
 from __future__ import annotations
 
 import re
+import time
 import socket
 from pathlib import Path
 
@@ -25,6 +26,17 @@ from supportless.settings import SearchSettings
 from supportless.ui import App, find_free_port
 
 ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
+
+
+def _until(condition, timeout: float = 300.0) -> bool:
+    """Poll ``condition()`` until it holds (True) or ``timeout`` seconds pass (False): a wait for a state, not a
+    fixed delay, so a slow machine takes longer but reaches the same verdict."""
+    end = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > end:
+            return False
+        time.sleep(0.05)
+    return True
 
 
 @pytest.fixture(scope="module")
@@ -416,14 +428,13 @@ def test_page_in_chromium(rig, tmp_path, chromium):
                 box = page.get_by_label(label)
                 box.fill(value)
                 box.press("Tab")
-            page.wait_for_timeout(300)
-            assert app.state.settings.particles == 20
-            assert app.state.settings.iterations == 10
+            assert _until(lambda: app.state.settings.particles == 20 and app.state.settings.iterations == 10)
             page.get_by_role("button", name="Optimize").click()
             page.get_by_text(re.compile("search finished")).wait_for(timeout=300000)
             assert "iteration 20 / 20" in page.locator("body").inner_text()
-            app.wait_idle()
-            page.wait_for_timeout(1500)
+            assert app.wait_idle()
+            # the panel shows the measures of the pose the search left (rendered by the page, so polled)
+            assert _until(lambda: "less than rest" in energies.inner_text())
             done_text = energies.inner_text()
             assert _number(done_text, "Support (column)") < rest_column
             assert "less than rest" in done_text
@@ -434,11 +445,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             view = page.get_by_role("combobox", name="View")
             view.click()
             page.get_by_role("option", name="as printed").click()
-            for _ in range(100):
-                if app.view["frame"] == "print":
-                    break
-                page.wait_for_timeout(100)
-            assert app.view["frame"] == "print"
+            assert _until(lambda: app.view["frame"] == "print")
             assert app.wait_idle()
             assert np.allclose(app.shown_vertices, app.state.printed_on_plate(), atol=1e-12)
             # a clean picture: no software-WebGL notice, panel scrolled to the energies
@@ -451,7 +458,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
                 except PlaywrightTimeout:  # gone already
                     pass
             page.get_by_text("Status:").scroll_into_view_if_needed()
-            page.wait_for_timeout(1000)
+            page.wait_for_load_state("networkidle")
             ARTIFACTS.mkdir(exist_ok=True)
             page.screenshot(path=str(ARTIFACTS / "ui.png"))
             browser.close()
