@@ -51,6 +51,18 @@ _NORMALISE = {5120: 127.0, 5121: 255.0, 5122: 32767.0, 5123: 65535.0}
 _WIDTHS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _COMPRESSION = ("KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression")
 
+#: Required extensions a loader may meet: the compressions it decodes, quantized attributes (normalized
+#: integers, read as such), and extensions of materials, textures, lights and cameras, which leave the mesh
+#: and its skin as they are. Any other required extension is refused, as the glTF specification asks.
+_READ = (*_COMPRESSION, "KHR_mesh_quantization")
+_APPEARANCE = ("KHR_materials_", "KHR_texture_", "EXT_texture_", "KHR_lights_", "EXT_lights_", "KHR_xmp",
+               "KHR_animation_pointer")
+
+
+def _understood(extension: str) -> bool:
+    """Whether a required glTF extension leaves what supportless reads readable."""
+    return extension in _READ or extension.startswith(_APPEARANCE)
+
 
 def is_gltf(path) -> bool:
     """Whether a path names a glTF asset (``.glb`` or ``.gltf``)."""
@@ -93,6 +105,10 @@ def _load_document(path):
             raise InputError(path, f"buffer {i} holds {len(data)} bytes but the file says {buf.byteLength}; "
                              "the file is truncated")
         buffers.append(data)
+    unknown = [ext for ext in doc.extensionsRequired or [] if not _understood(ext)]
+    if unknown:
+        raise InputError(path, f"the file requires the glTF extension{'s' if len(unknown) > 1 else ''} "
+                               f"{', '.join(unknown)}, which supportless does not read; export without it")
     used = set(doc.extensionsRequired or []) | set(doc.extensionsUsed or [])
     if any(ext in used for ext in _COMPRESSION):
         from .gltf_decode import decode_compressed

@@ -335,6 +335,39 @@ def check_mesh_arrays(V, F, path: str | os.PathLike | None = None) -> tuple[np.n
     return V, F
 
 
+def check_not_flat(V: np.ndarray, F: np.ndarray, path: str | os.PathLike | None = None) -> None:
+    """Refuse a mesh that has no size or encloses nothing (all its vertices on a point, a line or a plane).
+
+    Parameters
+    ----------
+    V : (n, 2) or (n, 3) float64
+    F : (f, 3) int64
+    path : str or os.PathLike, optional
+        Named in the message.
+
+    Raises
+    ------
+    InputError
+        ``the mesh has no size`` when its vertices are one point; ``the mesh
+        is flat (no volume)`` when a closed surface encloses no volume, or a
+        planar mesh covers no area (a closed surface squashed onto z = 0).
+    """
+    used = V[np.unique(F)]
+    size = float(np.ptp(used, axis=0).max())
+    if not size > 0:
+        raise InputError(path, "the mesh has no size: all its vertices are at one point; export it again")
+    corners = V[F]
+    if V.shape[1] == 2:
+        e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+        enclosed = abs(float(np.sum(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))) / 2 / size ** 2
+    else:
+        enclosed = abs(float(np.einsum("ij,ij->i", corners[:, 0], np.cross(corners[:, 1], corners[:, 2])).sum())) \
+            / 6 / size ** 3
+    if enclosed < 1e-9:
+        raise InputError(path, "the mesh is flat (no volume): its vertices lie on a line or a plane; "
+                               "export the closed surface of the model")
+
+
 def write_mesh(path: str | os.PathLike, V: np.ndarray, F: np.ndarray) -> None:
     """Write a triangle mesh atomically, in the format the extension names.
 

@@ -1,15 +1,11 @@
 """The rig: rest surface, skeleton, volume mesh and skinning weights.
 
-:func:`prepare_rig` builds a :class:`Rig` from arrays: it meshes the inside of
-the surface with the bones sampled into it (TetGen, see
-:mod:`supportless.tetmesh`) and computes bounded biharmonic weights
-(``igl.boundary_conditions`` + ``igl.bbw``). :func:`load_rig` does the same from
-files and keeps the result in an on-disk cache keyed by a hash of the inputs
-and settings, so loading the same model again takes a fraction of a second.
-
-A planar figure (all z = 0, as the paper's 2D mode) becomes a 2D rig: arrays
-have ``d = 2`` columns and the "volume" mesh is the triangle mesh itself,
-refined so that vertices lie on the bones.
+:func:`prepare_rig` builds a :class:`Rig` from arrays: it meshes the inside of the surface with the bones
+sampled into it (TetGen, see :mod:`supportless.tetmesh`) and computes bounded biharmonic weights
+(``igl.boundary_conditions`` + ``igl.bbw``). :func:`load_rig` does the same from files and keeps the result
+in an on-disk cache keyed by a hash of the inputs and settings, so loading the same model again takes a
+fraction of a second. A planar figure (all z = 0, as the paper's 2D mode) becomes a 2D rig: arrays have
+``d = 2`` columns and the "volume" mesh is the triangle mesh itself, refined so vertices lie on the bones.
 """
 
 from __future__ import annotations
@@ -30,7 +26,8 @@ from .errors import InputError
 from .repair import repair_degenerate_faces, repair_note
 from .skeleton import check_skeleton
 from .geometry import parse_up, points_in_triangles, signed_volume
-from .io import atomic_path, check_closed_surface, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .io import (atomic_path, check_closed_surface, check_not_flat, read_dmat, read_mesh, read_tet_mesh,
+                 read_tgf)
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, check_weights, compute_weights
 
@@ -291,7 +288,9 @@ def _check_inputs(V, F, joints, bones, up, mesh_path=None, skel_path=None, joint
         raise InputError(mesh_path, "a face refers to a vertex out of range")
     if joints.shape[1] != V.shape[1] and not (V.shape[1] == 2 and joints.shape[1] == 3):
         raise InputError(skel_path, f"skeleton is {joints.shape[1]}D but the mesh is {V.shape[1]}D")
-    if V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0)):  # planar
+    planar = V.shape[1] == 2 or (np.all(V[:, 2] == 0) and np.all(joints[:, 2] == 0))
+    check_not_flat(V[:, :2] if planar else V, F, mesh_path)
+    if planar:
         V2, J2 = V[:, :2], joints[:, :2]
         if signed_volume(V2, F) < 0:
             F = F[:, ::-1].copy()

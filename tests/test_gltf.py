@@ -872,6 +872,19 @@ def test_a_truncated_glb_is_refused(tmp_path, cache, keep, fragment):
     assert_input_error(path, cache, fragment)
 
 
+def test_a_required_extension_it_does_not_read_is_refused_by_name(tmp_path, cache):
+    """The glTF specification: a loader refuses an asset requiring an extension it does not know."""
+    path = write_gltf(character(), tmp_path / "future.glb", extensions_used=("EXT_future_geometry",),
+                      extensions_required=("EXT_future_geometry",))
+    assert_input_error(path, cache, "requires the glTF extension EXT_future_geometry")
+    # only used, or required but about materials: read as before
+    used = write_gltf(character(), tmp_path / "used.glb", extensions_used=("EXT_future_geometry",))
+    assert load(used, cache).bone_count == 3
+    looks = write_gltf(character(), tmp_path / "looks.glb", extensions_used=("KHR_materials_unlit",),
+                       extensions_required=("KHR_materials_unlit",))
+    assert load(looks, cache).bone_count == 3
+
+
 def test_a_gltf_whose_bin_is_missing_is_refused(tmp_path, cache):
     path = write_gltf(character(), tmp_path / "external.gltf", external_bin=True)
     assert load(path, cache).bone_count == 3  # readable with its .bin

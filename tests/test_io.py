@@ -522,3 +522,28 @@ def test_a_rig_cache_entry_left_half_written_by_a_kill_is_removed_by_the_next_wr
     entry.unlink()  # the rerun writes the entry again
     sl.load_rig("demo:branch", cache_dir=tmp_path)
     assert not leftover.exists() and entry.exists()
+
+
+@pytest.mark.parametrize("squash, fragment", [((0, 0, 0), "has no size"), ((1, 1, 0), "is flat (no volume)"),
+                                              ((0, 1, 1), "is flat (no volume)"), ((1, 0, 0), "is flat (no volume)")],
+                         ids=["point", "onto-z0", "onto-x0", "onto-a-line"])
+def test_a_collapsed_mesh_is_one_line_naming_the_file(tmp_path, squash, fragment):
+    """All vertices on a point, a plane or a line: one line, not a traceback or a misleading joint message."""
+    import supportless as sl
+    from supportless.errors import InputError
+
+    V, F, J, B = sl.demo_figure("branch")[:4]
+    sl.write_mesh(tmp_path / "m.obj", V * np.asarray(squash, float), F)
+    sl.write_tgf(tmp_path / "m.tgf", J, B)
+    with pytest.raises(InputError) as err:
+        sl.load_rig(tmp_path / "m.obj", tmp_path / "m.tgf", cache=False)
+    message = str(err.value)
+    assert fragment in message and str(tmp_path / "m.obj") in message and "\n" not in message
+
+
+def test_check_not_flat_accepts_a_thin_but_real_solid():
+    from supportless.io import check_not_flat
+
+    V, F = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1e-3]], float), np.array([[0, 2, 1], [0, 1, 3],
+                                                                                          [1, 2, 3], [0, 3, 2]])
+    check_not_flat(V, F)  # a sliver 1/1000 as thick as wide still encloses volume
