@@ -7,6 +7,8 @@ importing the command group.
 
 from __future__ import annotations
 
+import errno
+
 import sys
 
 import click
@@ -98,7 +100,8 @@ def rig_options(f):
 
 
 class _Group(click.Group):
-    """Turns the package's own errors into one line and exit status 2."""
+    """Turns the package's own errors into one line and exit status 2; a failed write into one line and
+    :data:`EXIT_WRITE_FAILED`."""
 
     def invoke(self, ctx):
         try:
@@ -111,6 +114,18 @@ class _Group(click.Group):
         except BrokenPipeError:  # the reader of stdout went away; the files are written before the summary
             drop_stdout()
             sys.exit(0)
+        except OSError as exc:  # a full disk, a read-only or vanished folder while writing: one line
+            if exc.errno not in _WRITE_ERRNOS:
+                raise
+            where = f"{exc.filename}: " if exc.filename else ""
+            hint = "free some space" if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else \
+                "check the permissions, or choose another folder"
+            click.echo(f"supportless: error: {where}{exc.strerror or exc}; {hint}", err=True)
+            sys.exit(EXIT_WRITE_FAILED)
+
+
+#: Errors of a file the tool writes that say where and why in one line (:class:`_Group`).
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EFBIG, errno.EIO}
 
 
 def _search_options(f):

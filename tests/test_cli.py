@@ -501,3 +501,34 @@ def test_apply_on_a_full_disk_is_one_line_and_no_file(branch_files, tmp_path, mo
     errors = [line for line in result.stderr.splitlines() if line.startswith("supportless: error")]
     assert len(errors) == 1 and "No space left on device" in errors[0] and "Traceback" not in result.output
     assert not (tmp_path / "posed.stl").exists()
+
+
+@pytest.mark.parametrize("command", ["demo", "batch"])
+def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, monkeypatch, command):
+    """Disk full while demo writes its files, or while batch writes its contact sheet: one line, no traceback."""
+    import errno
+
+    import supportless.batch as batch
+    import supportless.io as sio
+    from supportless.cli_common import EXIT_WRITE_FAILED
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "out" / "file"))
+
+    if command == "demo":
+        monkeypatch.setattr(sio, "write_mesh", full)
+        result = run("demo", "--figure", "branch", "--out", tmp_path / "out", "--particles", 4, "--iterations", 1,
+                     "-q")
+    else:
+        d = tmp_path / "in"
+        d.mkdir()
+        V, F, J, B = sl.demo_figure("branch")[:4]
+        sl.write_mesh(d / "branch.obj", V, F)
+        sl.write_tgf(d / "branch.tgf", J, B)
+        monkeypatch.setattr(batch, "write_contact_sheet", full)
+        result = run("batch", d, "-o", tmp_path / "out", "--workers", 1, "--particles", 4, "--iterations", 1,
+                     "--orient", "keep", "-q", "--cache-dir", tmp_path / "cache")
+    assert result.exit_code == EXIT_WRITE_FAILED, result.output
+    errors = [line for line in result.stderr.splitlines() if line.startswith("supportless: error")]
+    assert len(errors) == 1 and "No space left on device" in errors[0] and "free some space" in errors[0]
+    assert "Traceback" not in result.output
