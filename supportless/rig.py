@@ -11,8 +11,6 @@ fraction of a second. A planar figure (all z = 0, as the paper's 2D mode) become
 from __future__ import annotations
 
 import hashlib
-import json
-import os
 import time
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -26,15 +24,12 @@ from .errors import InputError
 from .repair import repair_degenerate_faces, repair_note
 from .skeleton import check_skeleton
 from .geometry import parse_up, points_in_triangles, signed_volume
-from .io import (atomic_path, check_closed_surface, check_not_flat, read_dmat, read_mesh, read_tet_mesh,
-                 read_tgf)
+from .io import check_closed_surface, check_not_flat, read_dmat, read_mesh, read_tet_mesh, read_tgf
+from .rigcache import default_cache_dir, gltf_cache_file, read_entry, rig_cache_key, write_entry
 from .joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from .weights import BBW_ITERATIONS, check_weights, compute_weights
 
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "load_rig", "prepare_rig", "rig_cache_key"]
-
-#: Bump when the cached content or the way it is computed changes.
-CACHE_VERSION = 7
 
 #: A surface with more triangles than this is simplified (quadric edge
 #: collapse, no new self-intersections) to :data:`PROXY_TARGET` triangles for
@@ -499,27 +494,6 @@ def _attach_surface(V, TV, TT, path):
 # --------------------------------------------------------------------------- #
 # loading with a cache
 # --------------------------------------------------------------------------- #
-def default_cache_dir() -> Path:
-    """The rig cache folder: ``$SUPPORTLESS_CACHE``, else ``$XDG_CACHE_HOME/supportless``, else ``~/.cache/supportless``."""
-    env = os.environ.get("SUPPORTLESS_CACHE")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "supportless"
-
-
-def rig_cache_key(V, F, J, B, up, **settings) -> str:
-    """Hash of everything a prepared rig depends on (hex string)."""
-    h = hashlib.sha256()
-    h.update(f"supportless-rig-v{CACHE_VERSION}".encode())
-    for a in (V, F, J, B, up):
-        a = np.ascontiguousarray(a)
-        h.update(str(a.dtype).encode() + str(a.shape).encode())
-        h.update(a.tobytes())
-    h.update(repr(sorted(settings.items())).encode())
-    return h.hexdigest()[:24]
-
-
 def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None, tets=None, weights=None,
              samples_per_bone: int = SAMPLES_PER_BONE, bbw_iterations: int = BBW_ITERATIONS,
              progress=None, height_mm: float | None = None) -> Rig:
@@ -560,6 +534,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     from .gltf import is_gltf, load_gltf_character
 
     surface_weights = labels = source = None
+    notes: list[str] = []  # a damaged cache entry, said on the rig prepared again
     if isinstance(model, str) and model.startswith("demo:"):
         from .shapes import demo_figure
 
@@ -573,9 +548,9 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         if tets is not None:
             raise InputError(tets, "--tets does not go with a glTF model's skin; leave it out")
         # keyed by the file's bytes, so a cached rig skips reading the skin and making the print body
-        file = _gltf_cache_file(mesh_path, cache_dir, weights or "skin", height_mm, up, samples_per_bone,
+        file = gltf_cache_file(mesh_path, cache_dir, weights or "skin", height_mm, up, samples_per_bone,
                                 bbw_iterations)
-        if cache and (rig := _try_cached(file, name)) is not None and "gltf" in rig.info:
+        if cache and (rig := _try_cached(file, name, notes)) is not None and "gltf" in rig.info:
             rig.info["gltf"]["path"] = str(mesh_path)  # the same bytes may have moved
             return rig
         V, F, J, B, surface_weights, labels, source = load_gltf_character(mesh_path, progress=progress)
@@ -617,7 +592,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         key = rig_cache_key(V, F, J, B, np.resize(parse_up(up, 2 if planar else 3), 3) * [1, 1, not planar],
                             **settings)
         file = (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{key}.npz"
-        if cache and (rig := _try_cached(file, name)) is not None:
+        if cache and (rig := _try_cached(file, name, notes)) is not None:
             return rig
     try:
         rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,
@@ -635,64 +610,23 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     rig.info["from_cache"] = False
     if cache:
         try:
-            _write_cached(file, rig)
+            write_entry(file, rig)
             rig.info["cache"] = str(file)
         except OSError as exc:
             rig.info["cache"] = None
             rig.info.setdefault("warnings", []).append(
                 f"the rig cache {file.parent} cannot be written ({exc.strerror or exc}): the rig is prepared again "
                 f"next time; --cache-dir DIR chooses another folder")
+    rig.info["warnings"] = list(rig.info.get("warnings", [])) + notes  # after the entry: said once
     return rig
 
 
-def _gltf_cache_file(path: Path, cache_dir, weights, height_mm, up, samples_per_bone, bbw_iterations) -> Path:
-    """The cache file of a glTF rig: a hash of the file's bytes and every setting that changes the rig."""
-    h = hashlib.sha256(f"supportless-gltf-rig-v{CACHE_VERSION}".encode())
-    try:
-        h.update(path.read_bytes())
-    except OSError:  # reading it properly says what is wrong
-        h.update(b"unreadable")
-    h.update(repr((weights, height_mm, np.asarray(parse_up(up), np.float64).tolist(), samples_per_bone,
-                   bbw_iterations)).encode())
-    return (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{h.hexdigest()[:24]}.npz"
-
-
-def _try_cached(file: Path, name: str) -> Rig | None:
-    """The rig cached in ``file``, or None (missing or damaged: a damaged entry is recomputed, never fatal)."""
-    if not file.is_file():
+def _try_cached(file: Path, name: str, notes: list[str]) -> Rig | None:
+    """The rig cached in ``file``, or None (missing or damaged: a damaged entry is recomputed, with a note)."""
+    fields = read_entry(file, notes)
+    if fields is None:
         return None
-    try:
-        rig = _read_cached(file, name)
-    except Exception:
-        return None
+    rig = Rig(**fields, name=name)
     rig.info["cache"] = str(file)
     rig.info["from_cache"] = True
     return rig
-
-
-_ARRAYS = ("vertices", "faces", "joints", "bones", "tet_vertices", "tets", "tet_weights", "up")
-
-
-def _write_cached(file: Path, rig: Rig) -> None:
-    file.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(file) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, version=CACHE_VERSION, warnings=np.array(rig.info.get("warnings", []), dtype=str),
-                     labels=np.array(rig.labels if rig.labels is not None else [], dtype=str),
-                     has_labels=rig.labels is not None,
-                     coarse_faces=rig.coarse_faces if rig.coarse_faces is not None else np.zeros((0, 3), np.int64),
-                     gltf=np.array(json.dumps(rig.info.get("gltf"))),
-                     **{k: getattr(rig, k) for k in _ARRAYS})
-
-
-def _read_cached(file: Path, name: str) -> Rig:
-    with np.load(file) as data:
-        if int(data["version"]) != CACHE_VERSION:
-            raise ValueError("old cache version")
-        arrays = {k: data[k] for k in _ARRAYS}
-        warnings = [str(w) for w in data["warnings"]]
-        labels = [str(x) for x in data["labels"]] if bool(data["has_labels"]) else None
-        coarse = data["coarse_faces"] if len(data["coarse_faces"]) else None
-        source = json.loads(str(data["gltf"]))
-    info = {"warnings": warnings} | ({"gltf": source} if source is not None else {})
-    return Rig(**arrays, name=name, info=info, labels=labels, coarse_faces=coarse)

@@ -93,7 +93,7 @@ LAYERS = [
     {"supportless.skeleton", "supportless.paths", "supportless.repair"},
     {"supportless.io", "supportless.posefile", "supportless.threemf", "supportless.gcode", "supportless.profile", "supportless.joints", "supportless.printbody", "supportless.kinematics", "supportless.tetmesh",
      "supportless.gltf", "supportless.gltf_decode", "supportless.shapes", "supportless.weights"},
-    {"supportless.rig", "supportless.energies"},
+    {"supportless.rig", "supportless.rigcache", "supportless.energies"},
     {"supportless.standing", "supportless.prior", "supportless.symmetry", "supportless.orientation"},
     {"supportless.objective"},
     {"supportless.settings"},

@@ -213,13 +213,45 @@ def test_changed_input_misses_the_cache(tmp_path, branch_files):
     assert len(list(cache.glob("*.npz"))) == 3
 
 
-def test_damaged_cache_entry_is_recomputed(tmp_path):
-    sl.load_rig("demo:branch", cache_dir=tmp_path)
+@pytest.mark.parametrize("damage", ["garbage", "truncated"])
+def test_damaged_cache_entry_is_rebuilt_with_a_warning(tmp_path, damage):
+    first = sl.load_rig("demo:branch", cache_dir=tmp_path)
     (entry,) = tmp_path.glob("*.npz")
-    entry.write_bytes(b"not an npz file")
+    whole = entry.read_bytes()
+    entry.write_bytes(b"not an npz file" if damage == "garbage" else whole[: len(whole) // 2])  # a full disk
     rig = sl.load_rig("demo:branch", cache_dir=tmp_path)
     assert rig.info["from_cache"] is False
-    assert sl.load_rig("demo:branch", cache_dir=tmp_path).info["from_cache"] is True
+    said = [w for w in rig.info["warnings"] if "was damaged" in w]
+    assert len(said) == 1 and str(entry) in said[0]
+    again = sl.load_rig("demo:branch", cache_dir=tmp_path)
+    assert again.info["from_cache"] is True and not [w for w in again.info["warnings"] if "damaged" in w]
+    np.testing.assert_array_equal(again.tet_weights, first.tet_weights)
+
+
+_PREPARE = """
+import sys, numpy as np, supportless as sl
+rig = sl.load_rig(sys.argv[1], sys.argv[2], cache_dir=sys.argv[3])
+np.save(sys.argv[4], rig.tet_weights)
+print(rig.info["from_cache"])
+"""
+
+
+def test_four_processes_preparing_one_model_at_once_share_the_cache_safely(tmp_path, branch_files):
+    """Each process prepares or reads the rig; none reads a half-written entry; one entry stays, no leftovers."""
+    import subprocess
+    import sys
+
+    cache = tmp_path / "shared-cache"
+    procs = [subprocess.Popen([sys.executable, "-c", _PREPARE, str(branch_files["mesh"]), str(branch_files["skeleton"]),
+                               str(cache), str(tmp_path / f"w{i}.npy")], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True) for i in range(4)]
+    outs = [p.communicate(timeout=600) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [e for _, e in outs]
+    weights = [np.load(tmp_path / f"w{i}.npy") for i in range(4)]
+    for w in weights[1:]:
+        np.testing.assert_array_equal(w, weights[0])
+    assert [p.name for p in cache.iterdir()] == [next(cache.glob("rig-*.npz")).name]  # one entry, no temporaries
+    assert sl.load_rig(branch_files["mesh"], branch_files["skeleton"], cache_dir=cache).info["from_cache"] is True
 
 
 def test_a_cache_that_cannot_be_written_is_said_once_and_the_rig_still_loads(tmp_path):
@@ -411,8 +443,10 @@ def test_a_dense_surface_is_meshed_and_weighted_through_its_simplified_proxy(den
 def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
     rig, _ = dense_branch
     file = tmp_path / "rig.npz"
-    rig_mod._write_cached(file, rig)
-    back = rig_mod._read_cached(file, "dense")
+    from supportless.rigcache import read_entry, write_entry
+
+    write_entry(file, rig)
+    back = rig_mod.Rig(**read_entry(file), name="dense")
     np.testing.assert_array_equal(back.coarse_faces, rig.coarse_faces)
 
 
