@@ -1,10 +1,11 @@
-"""Bounded biharmonic skinning weights of a volume mesh (libigl's ``bbw``)."""
+"""Bounded biharmonic skinning weights of a volume mesh (libigl's ``bbw``, in a child process: a crash is one line)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .errors import InputError
+from .isolated import NativeFailure, run_isolated
 
 __all__ = ["check_weights", "compute_weights"]
 
@@ -29,6 +30,22 @@ def _point_segment_distance(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.n
     AB = B - A
     t = np.clip(np.einsum("nmd,md->nm", P[:, None] - A[None], AB) / np.maximum((AB * AB).sum(1), 1e-300), 0, 1)
     return np.linalg.norm(P[:, None] - (A[None] + t[..., None] * AB[None]), axis=-1)
+
+
+def _bbw(TV, TT, b, bc, iterations):
+    """libigl's bounded biharmonic weights (the call :func:`_isolated_bbw` runs in a child process)."""
+    import igl
+
+    return igl.bbw(TV, TT, b, bc, partition_unity=True, max_iter=iterations)
+
+
+def _isolated_bbw(TV, TT, b, bc, iterations):
+    """:func:`_bbw` where a crash of libigl's solver is one line (:func:`supportless.isolated.run_isolated`)."""
+    try:
+        return run_isolated(_bbw, TV, TT, b, bc, iterations, what="the skinning weights (libigl's BBW)")
+    except NativeFailure as exc:
+        raise InputError(None, f"{exc}: the volume mesh may be broken; repair the surface (close holes, remove "
+                               "parts that cut each other) or prepare it with fewer bones") from None
 
 
 def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarray, bones: np.ndarray,
@@ -76,14 +93,14 @@ def compute_weights(tet_vertices: np.ndarray, tets: np.ndarray, joints: np.ndarr
     boned = np.isin(part, part[b])
     W = np.zeros((len(TV), len(BE)))
     if boned.all():
-        W[:] = igl.bbw(TV, TT, b, np.asarray(bc, np.float64), partition_unity=True, max_iter=iterations)
+        W[:] = _isolated_bbw(TV, TT, b, np.asarray(bc, np.float64), iterations)
     else:  # solve where bones are; each bone-less part follows its nearest bone
         keep = np.flatnonzero(boned)
         index = np.full(len(TV), -1)
         index[keep] = np.arange(len(keep))
         sub = TT[boned[TT].all(axis=1)]
-        W[keep] = igl.bbw(np.ascontiguousarray(TV[keep]), np.ascontiguousarray(index[sub]), index[b],
-                          np.asarray(bc, np.float64), partition_unity=True, max_iter=iterations)
+        W[keep] = _isolated_bbw(np.ascontiguousarray(TV[keep]), np.ascontiguousarray(index[sub]), index[b],
+                                np.asarray(bc, np.float64), iterations)
         for label in np.unique(part[~boned]):
             verts = np.flatnonzero(part == label)
             nearest = int(np.argmin(_point_segment_distance(TV[verts], C[BE[:, 0]], C[BE[:, 1]]).min(axis=0)))

@@ -73,3 +73,25 @@ def test_given_weights_are_checked_and_named():
                        (np.array([[0.0, 0.0]]), "vertex 0 has no weight on any bone")):
         with pytest.raises(InputError, match=words):
             check_weights(bad)
+
+
+def test_a_crash_in_the_weight_solver_is_one_line_not_a_dead_process(monkeypatch):
+    """A stand-in solver that aborts (as a native library does on bad input): the caller gets one InputError."""
+    import os
+
+    import pytest
+
+    import supportless as sl
+    import supportless.weights as weights
+    from supportless.errors import InputError
+
+    def aborts(*args):
+        os.abort()
+
+    monkeypatch.setattr(weights, "_bbw", aborts)
+    V, F, J, B = sl.demo_figure("branch")[:4]
+    TV, TT = tetrahedralize_with_skeleton(V, F, J, B)[:2]
+    with pytest.raises(InputError) as err:
+        weights.compute_weights(TV, TT, J, B)
+    message = str(err.value)
+    assert "skinning weights" in message and "crashed" in message and "SIGABRT" in message and "\n" not in message
