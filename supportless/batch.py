@@ -81,9 +81,16 @@ def find_models(folder: str | os.PathLike) -> list[ModelSpec]:
     if not specs:
         raise InputError(folder, f"no models here: put X.glb, or X.obj with X.tgf ({', '.join(MESH_FORMATS)})")
     names = [s.name for s in specs]
-    return [s if names.count(s.name) == 1 else ModelSpec(s.name, s.mesh, s.skeleton,
-                                                         f"several meshes are named {s.name}; rename all but one")
-            for s in specs]
+    out, said = [], set()
+    for s in specs:  # one row per name: several meshes under one name are one failed model
+        if names.count(s.name) == 1:
+            out.append(s)
+        elif s.name not in said:
+            said.add(s.name)
+            files = ", ".join(Path(t.mesh).name for t in specs if t.name == s.name)
+            out.append(ModelSpec(s.name, s.mesh, s.skeleton,
+                                 f"several meshes are named {s.name} ({files}); rename all but one"))
+    return out
 
 
 def finished_row(out: str | os.PathLike, name: str) -> dict | None:

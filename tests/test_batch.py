@@ -59,6 +59,14 @@ def test_find_models_pairs_meshes_and_skeletons(folder):
         find_models(folder / "..")  # the test's folder holds only the 'in' folder
 
 
+def test_meshes_sharing_a_name_are_one_failed_model(folder):
+    """dup.obj + dup.glb: one row saying both files, so the count matches summary.csv."""
+    V, F, J, B = sl.demo_figure("branch")[:4]
+    sl.write_mesh(folder / "arm.stl", V, F)  # arm.obj is there too, both beside arm.tgf
+    specs = [s for s in find_models(folder) if s.name == "arm"]
+    assert len(specs) == 1 and "arm.obj" in specs[0].problem and "arm.stl" in specs[0].problem
+
+
 def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path):
     from supportless.cli import main
 
