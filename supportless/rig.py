@@ -366,6 +366,7 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
                                                   (bones, np.int64)))
     skinned = surface_weights is not None
     coarse = simplified = None
+    V, J, tet_mesh, moved = _near_origin(V, J, tet_mesh, skinned)
     V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
                                            pivots_only=pivots_only)
     up_vec = parse_up(up, dim)
@@ -432,9 +433,38 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     t2 = time.perf_counter()
     info = {"tet_seconds": t1 - t0, "weights_seconds": t2 - t1, "samples_per_bone": samples_per_bone,
             "bbw_iterations": bbw_iterations, "warnings": warnings, "weights": "skin" if skinned else "bbw"}
+    if moved is not None:  # printed files are placed on the plate anyway; the report says where it was
+        info |= {"moved_by": moved.tolist(), "warnings": warnings + [
+            f"the model lies {np.linalg.norm(moved) / np.ptp(V, axis=0).max():.3g} times its size from the "
+            "origin: it was moved to the origin first (its volumes would lose their digits)"]}
     proxy = coarse is not None or simplified is not None
     return Rig(V, F, J, B, TV, TT, W, up_vec, name=name, info=info, labels=list(labels) if labels is not None else None,
                coarse_faces=Fc + len(V) if proxy else None)
+
+
+#: A model whose centre lies farther from the origin than this many times its size is moved to the origin
+#: before anything is computed: volumes, orientations and winding numbers of coordinates much larger than
+#: the model lose their digits (the bunny moved 5e4 sizes away: joints "outside", faces flipped).
+FAR_FROM_ORIGIN = 100.0
+
+
+def _near_origin(V, J, tet_mesh, skinned):
+    """``V``, ``J`` and ``tet_mesh`` moved to the origin when :data:`FAR_FROM_ORIGIN` says so, and by how much.
+
+    A skinned (glTF) model keeps its frame: its skin is written back in it.
+    """
+    if skinned or not len(V) or not np.isfinite(V).all():
+        return V, J, tet_mesh, None
+    centre = (V.min(axis=0) + V.max(axis=0)) / 2
+    size = float(np.ptp(V, axis=0).max())
+    if not size > 0 or np.linalg.norm(centre) <= FAR_FROM_ORIGIN * size:
+        return V, J, tet_mesh, None
+    d = V.shape[1]
+    J = J.copy()
+    J[:, :d] -= centre
+    if tet_mesh is not None:
+        tet_mesh = (np.asarray(tet_mesh[0], np.float64) - centre, tet_mesh[1])
+    return V - centre, J, tet_mesh, -centre
 
 
 def _simplified(V, F, say):
