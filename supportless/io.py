@@ -22,6 +22,7 @@ import numpy as np
 
 from .errors import InputError
 from .interrupt import pause_point
+from .scratch import owner_tag, remove_leftovers
 from .skeleton import check_skeleton
 from .threemf import write_3mf
 
@@ -54,8 +55,8 @@ def atomic_path(path: str | os.PathLike):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale_temporaries(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    remove_leftovers(path.parent, f".{path.stem}.", path.suffix)  # of killed runs (supportless.scratch)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.{owner_tag()}-", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(tmp)
     try:
@@ -66,28 +67,6 @@ def atomic_path(path: str | os.PathLike):
     finally:
         if tmp.exists():
             tmp.unlink()
-
-
-#: A temporary file of :func:`atomic_path` untouched this long was left by a run that was killed: the next
-#: write to the same destination removes it (a younger one may be another process's write under way).
-STALE_TEMPORARY_SECONDS = 3600.0
-
-
-def _remove_stale_temporaries(path: Path) -> None:
-    """Remove ``.STEM.XXXXXXXX.SUFFIX`` files beside ``path`` older than :data:`STALE_TEMPORARY_SECONDS`."""
-    import glob
-    import re
-    import time
-
-    pattern = re.compile(rf"^\.{re.escape(path.stem)}\.[A-Za-z0-9_]{{8}}{re.escape(path.suffix)}$")
-    now = time.time()
-    for name in glob.glob(glob.escape(str(path.parent / f".{path.stem}.")) + "*"):
-        stale = Path(name)
-        try:
-            if pattern.match(stale.name) and now - stale.stat().st_mtime > STALE_TEMPORARY_SECONDS:
-                stale.unlink()
-        except OSError:  # gone already, or not ours to remove
-            pass
 
 
 def _umask() -> int:

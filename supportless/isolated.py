@@ -4,7 +4,8 @@ TetGen, fTetWild and CGAL are C++ libraries that abort or segfault on some
 inputs (a surface that cuts itself, coincident points); in the same process
 that would end the program with no message. :func:`run_isolated` forks,
 runs the call in the child with its output silenced and its working folder
-a scratch folder (TetGen writes files there), and sends the result back
+a scratch folder (TetGen writes files there; the parent removes it even when
+the child dies, :mod:`supportless.scratch`), and sends the result back
 through a pipe. A crash, an exception or an exit in the child becomes one
 :class:`NativeFailure` in the parent.
 
@@ -15,11 +16,11 @@ from __future__ import annotations
 
 import os
 import pickle
-import shutil
 import signal
 import sys
-import tempfile
 import warnings
+
+from .scratch import scratch_dir
 
 __all__ = ["NativeFailure", "run_isolated"]
 
@@ -59,6 +60,23 @@ def run_isolated(fn, *args, what: str = "native code"):
             return fn(*args)
         except Exception as exc:  # the same contract as the child's
             raise NativeFailure(f"{what} failed: {exc}") from None
+    with scratch_dir("supportless-native-") as scratch:  # the parent removes it, whatever became of the child
+        data, status = _fork_and_wait(fn, args, scratch)
+    if os.WIFSIGNALED(status):
+        sig = os.WTERMSIG(status)
+        name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else f"signal {sig}"
+        raise NativeFailure(f"{what} crashed ({name})", crashed=True)
+    if not data:
+        raise NativeFailure(f"{what} exited with status {os.waitstatus_to_exitcode(status)} and no result",
+                            crashed=True)
+    kind, value = pickle.loads(data)
+    if kind == "error":
+        raise NativeFailure(f"{what} failed: {value}")
+    return value
+
+
+def _fork_and_wait(fn, args, scratch):
+    """Run ``fn(*args)`` in a forked child working in ``scratch``; (its pickled outcome, its wait status)."""
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
@@ -69,7 +87,7 @@ def run_isolated(fn, *args, what: str = "native code"):
         code = 0
         try:
             os.close(read_end)
-            _silence_and_scratch(fn, args, write_end)
+            _silence_and_run(fn, args, write_end, scratch)
         except BaseException:
             code = 1
         finally:
@@ -86,21 +104,11 @@ def run_isolated(fn, *args, what: str = "native code"):
         except OSError:
             pass
         raise
-    if os.WIFSIGNALED(status):
-        sig = os.WTERMSIG(status)
-        name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else f"signal {sig}"
-        raise NativeFailure(f"{what} crashed ({name})", crashed=True)
-    if not data:
-        raise NativeFailure(f"{what} exited with status {os.waitstatus_to_exitcode(status)} and no result",
-                            crashed=True)
-    kind, value = pickle.loads(data)
-    if kind == "error":
-        raise NativeFailure(f"{what} failed: {value}")
-    return value
+    return data, status
 
 
-def _silence_and_scratch(fn, args, write_end: int) -> None:
-    """In the child: quiet stdout/stderr, a scratch working folder, the pickled outcome to ``write_end``."""
+def _silence_and_run(fn, args, write_end: int, scratch) -> None:
+    """In the child: quiet stdout/stderr, ``scratch`` as working folder, the pickled outcome to ``write_end``."""
     import faulthandler
 
     faulthandler.disable()  # a crash is the parent's to report, not a traceback on the parent's terminal
@@ -108,7 +116,6 @@ def _silence_and_scratch(fn, args, write_end: int) -> None:
     os.dup2(null, 1)
     os.dup2(null, 2)
     sys.stdout = sys.stderr = open(os.devnull, "w")  # noqa: SIM115  (the child ends with os._exit)
-    scratch = tempfile.mkdtemp(prefix="supportless-native-")
     os.chdir(scratch)
     try:
         outcome = ("ok", fn(*args))
@@ -116,7 +123,6 @@ def _silence_and_scratch(fn, args, write_end: int) -> None:
         outcome = ("error", str(exc) or type(exc).__name__)
     finally:
         os.chdir("/")
-        shutil.rmtree(scratch, ignore_errors=True)
     payload = pickle.dumps(outcome, protocol=pickle.HIGHEST_PROTOCOL)
     with os.fdopen(write_end, "wb") as sink:
         sink.write(payload)

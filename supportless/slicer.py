@@ -22,7 +22,6 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -38,6 +37,7 @@ from .io import check_mesh_arrays, read_mesh, write_mesh
 from .printframe import place_vertices, rotation_to_z
 from .profile import DEFAULT_DENSITY, PrinterProfile
 from .report import reduction
+from .scratch import scratch_dir
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
@@ -458,7 +458,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
     cfg.setdefault("max-print-height", f"{max(210.0, math.ceil(ext[2] + 10.0)):g}")
     workers = workers or max(1, min(4, os.cpu_count() or 1))
 
-    with tempfile.TemporaryDirectory(prefix="supportless-slice-") as tmp:
+    with scratch_dir("supportless-slice-") as tmp:
         work = Path(keep_dir if keep_dir is not None else tmp)
         datadir = work / "prusa-datadir"
         datadir.mkdir(parents=True, exist_ok=True)

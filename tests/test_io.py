@@ -486,42 +486,76 @@ def test_a_tgf_index_of_31_digits_is_one_line(tmp_path):
         sl.read_tgf(path)
 
 
-def test_a_killed_writes_temporary_file_is_removed_by_the_next_write_a_young_one_is_not(tmp_path):
-    """``.pose.k3j_x9ab.json`` an hour old was left by a killed run; one a second old may be another's write."""
+def _dead_pid() -> int:
+    """A process id no process has (a child that has ended)."""
+    import subprocess
+    import sys
+
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait()
+    return child.pid
+
+
+def test_a_killed_writes_temporary_file_is_removed_by_the_next_write_a_live_ones_is_not(tmp_path):
+    """A temporary file names its owner: a dead process's goes at once, a live one's stays, an hour-old goes."""
     import os
     import time
 
-    from supportless.io import STALE_TEMPORARY_SECONDS, atomic_path
+    from supportless.io import atomic_path
+    from supportless.scratch import STALE_SECONDS, _host, owner_tag
 
-    old, young = tmp_path / ".pose.k3j_x9ab.json", tmp_path / ".pose.q1w2e3r4.json"
-    other = tmp_path / ".poses.k3j_x9ab.json"  # another destination's
-    for f in (old, young, other):
+    dead = tmp_path / f".pose.{_host()}-{_dead_pid()}-k3j_x9ab.json"  # a killed run's, a second old
+    live = tmp_path / f".pose.{owner_tag()}-q1w2e3r4.json"  # this process's own write under way
+    old = tmp_path / ".pose.z9y8x7w6.json"  # an owner-less name an hour old (or another host's)
+    other = tmp_path / f".poses.{_host()}-{_dead_pid()}-k3j_x9ab.json"  # another destination's
+    for f in (dead, live, old, other):
         f.write_text("{}")
-    past = time.time() - STALE_TEMPORARY_SECONDS - 60
+    past = time.time() - STALE_SECONDS - 60
     os.utime(old, (past, past))
-    os.utime(other, (past, past))
     with atomic_path(tmp_path / "pose.json") as tmp:
+        assert owner_tag() in tmp.name
         tmp.write_text("{}")
-    assert not old.exists() and young.exists() and other.exists()
+    assert not dead.exists() and not old.exists() and live.exists() and other.exists()
     assert (tmp_path / "pose.json").read_text() == "{}"
 
 
 def test_a_rig_cache_entry_left_half_written_by_a_kill_is_removed_by_the_next_write(tmp_path):
-    import os
-    import time
-
     import supportless as sl
-    from supportless.io import STALE_TEMPORARY_SECONDS
+    from supportless.scratch import _host
 
     sl.load_rig("demo:branch", cache_dir=tmp_path)
     entry = next(tmp_path.glob("*.npz"))
-    leftover = tmp_path / f".{entry.stem}.abcd1234.npz"
+    leftover = tmp_path / f".{entry.stem}.{_host()}-{_dead_pid()}-abcd1234.npz"
     leftover.write_bytes(b"half")
-    past = time.time() - STALE_TEMPORARY_SECONDS - 1
-    os.utime(leftover, (past, past))
     entry.unlink()  # the rerun writes the entry again
     sl.load_rig("demo:branch", cache_dir=tmp_path)
     assert not leftover.exists() and entry.exists()
+
+
+def test_every_kind_of_scratch_a_killed_run_leaves_is_removed_by_the_next_run(tmp_path, monkeypatch):
+    """The scratch names the tool makes, each left by a dead process, and what removes it on the next run."""
+    import tempfile
+
+    from supportless.isolated import run_isolated
+    from supportless.scratch import _host, scratch_dir
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # the system temporary folder, for this test
+    tag = f"{_host()}-{_dead_pid()}-"
+    left = {"native": tmp_path / f"supportless-native-{tag}a1b2c3d4",  # a native call's (TetGen, CGAL, BBW)
+            "slice": tmp_path / f"supportless-slice-{tag}e5f6g7h8",  # a PrusaSlicer run's
+            "ui": tmp_path / f"supportless-ui-{tag}i9j0k1l2"}  # the browser app's export folder
+    for path in left.values():
+        path.mkdir()
+        (path / "half").write_bytes(b"x")
+    assert run_isolated(sum, [1, 2]) == 3  # a native call clears its kind
+    assert not left["native"].exists() and left["slice"].exists()
+    with scratch_dir("supportless-slice-") as mine:  # what slice_support uses
+        assert mine.exists() and not left["slice"].exists()
+    assert not mine.exists()
+    with scratch_dir("supportless-ui-"):
+        pass
+    assert not left["ui"].exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith("supportless-")]
 
 
 @pytest.mark.parametrize("squash, fragment", [((0, 0, 0), "has no size"), ((1, 1, 0), "is flat (no volume)"),

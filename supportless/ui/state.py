@@ -32,7 +32,6 @@ Every change is announced to the listeners of :meth:`EditorState.subscribe` as `
 from __future__ import annotations
 
 import logging
-import tempfile
 import threading
 from pathlib import Path
 from typing import Callable
@@ -51,6 +50,7 @@ from ..orientation import print_direction, rotation_axis_angle
 from ..report import pose_measures, reduction
 from ..ranking import slice_choice_if_found
 from ..slicer import find_prusa_slicer
+from ..scratch import scratch_dir
 from ..search import PoseResult, optimize
 from ..settings import SearchSettings
 from ..printframe import PrintFrame, rig_print_frame
@@ -83,7 +83,7 @@ def _check_frame(frame: str) -> str:
 
 def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
     """The bytes ``write(path)`` puts in a temporary file called ``name``."""
-    with tempfile.TemporaryDirectory() as tmp:
+    with scratch_dir("supportless-ui-") as tmp:
         path = Path(tmp) / name
         write(path)
         return path.read_bytes()
@@ -399,7 +399,7 @@ class EditorState:
 
     def load_pose_bytes(self, name: str, content: bytes) -> None:
         """Load an uploaded pose file's content (same checks as :meth:`load_pose`)."""
-        with tempfile.TemporaryDirectory() as tmp:
+        with scratch_dir("supportless-ui-") as tmp:
             p = Path(tmp) / (Path(name).name or "pose.json")
             p.write_bytes(content)
             self._load_pose_file(p)
