@@ -50,6 +50,10 @@ def _run_search(rig, console, settings, quiet=False):
     """Run the search with a progress bar; returns the PoseResult."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from .crash import stage
+
+    stage("searching")
+
     from .search import optimize
 
     progress = Progress(TextColumn("[bold]search[/bold] {task.fields[phase]}"), BarColumn(bar_width=16),
@@ -170,8 +174,11 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, fra
     number that failed).
     """
     from .io import write_json
+    from .crash import stage
     from .posefile import write_pose
     from .report import write_pictures
+
+    stage("writing")
 
     def posed(path, vertices, standing_label=False):
         kind = _write_posed(path, rig, result.angles, result.vertices, vertices, frame)
@@ -331,6 +338,9 @@ def _slice_choice(rig, result, count, console, profile, frame, quiet=False):
     if count is None:
         count = SLICE_RANK if result.choice is not None and find_prusa_slicer() else 0
     if count:
+        from .crash import stage
+
+        stage("slicing")
         if not quiet:
             console.print(f"choosing among the best answers: slicing up to {count} with PrusaSlicer, two at a "
                           "time ...")
@@ -659,5 +669,13 @@ def bench(model, skeleton, up, particles, iterations, backend, targets, referenc
 
 main.add_command(batch)
 
+
+def run() -> None:
+    """The ``supportless`` executable: :func:`main` under :func:`supportless.crash.supervised` (a crash is one line)."""
+    from .crash import supervised
+
+    sys.exit(supervised(main))
+
+
 if __name__ == "__main__":  # pragma: no cover
-    main()
+    run()

@@ -12,7 +12,6 @@ import errno
 import sys
 
 import click
-import numpy as np
 
 from .errors import SupportlessError
 from .printframe import DEFAULT_HEIGHT_MM
@@ -45,8 +44,11 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
     The rig stays in the file's units; ``height_mm`` and ``keep_units`` only
     choose how the files are printed.
     """
+    from .crash import stage
     from .printframe import rig_print_frame
     from .rig import load_rig
+
+    stage("preparing the rig")
 
     def progress(msg):
         if not quiet:

@@ -89,7 +89,8 @@ def test_no_module_imports_the_package_front_door():
 # each layer may import only layers listed before it (data flows rig -> energies -> ... -> cli/ui)
 LAYERS = [
     {"supportless.errors", "supportless.geometry", "supportless.interrupt", "supportless.terminal",
-     "supportless.numba_cache", "supportless.printframe", "supportless.isolated", "supportless.copyleft", "supportless.scratch"},
+     "supportless.numba_cache", "supportless.printframe", "supportless.isolated", "supportless.copyleft", "supportless.scratch",
+     "supportless.crash"},
     {"supportless.skeleton", "supportless.paths", "supportless.repair"},
     {"supportless.io", "supportless.posefile", "supportless.threemf", "supportless.gcode", "supportless.profile", "supportless.joints", "supportless.printbody", "supportless.kinematics", "supportless.tetmesh",
      "supportless.gltf", "supportless.gltf_decode", "supportless.shapes", "supportless.weights"},
