@@ -10,7 +10,7 @@ from slicers import fake_exe, stand_in_slicer
 import supportless as sl
 from supportless.choice import KINDS, print_distance_deg
 from supportless.cli import main
-from supportless.ranking import SLICER_NOISE, distinct_poses, pick_sliced, slice_choice, to_slice
+from supportless.ranking import SLICE_RANK, SLICER_NOISE, distinct_poses, pick_sliced, slice_choice, to_slice
 from supportless.search import DISTINCT_DEGREES
 
 
@@ -151,7 +151,7 @@ def test_cli_default_slices_the_answers_with_the_slicer_it_finds(tmp_path, monke
     assert choice["by"] == "slicer" and "chosen by PrusaSlicer" in r.output
     assert {e["kind"] for e in choice["candidates"]} == set(KINDS)
     sliced = [e for e in choice["candidates"] if e["sliced_mm"] is not None]
-    assert 2 <= len(sliced) <= 3
+    assert 2 <= len(sliced) <= SLICE_RANK
     best = min(e["sliced_mm"] for e in sliced)
     mine = choice["candidates"][choice["chosen"] - 1]
     assert mine["chosen"] and mine["sliced_mm"] <= best / (1 - SLICER_NOISE) + 1e-9
