@@ -21,8 +21,9 @@ from typing import Callable
 
 import numpy as np
 
-from .choice import KINDS, PER_KIND, Choice, candidate_answers, choose_by_model, pool_of, print_distance_deg, with_choice
+from .choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from .copyleft.cgal import self_intersects
+from .printframe import DEFAULT_HEIGHT_MM
 from .profile import PrinterProfile
 from .result import as_written
 from .rig import Rig
@@ -93,7 +94,7 @@ def to_slice(choice: Choice, count: int, window: float = SLICE_WINDOW) -> list[i
     return picked
 
 
-def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = 60.0,
+def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = DEFAULT_HEIGHT_MM,
                  profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
                  slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S, window: float = SLICE_WINDOW,
                  per_kind: int = PER_KIND, slice_fn: Callable[..., object] | None = None) -> PoseResult:
@@ -134,12 +135,7 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     SlicerNotFound, SlicerError
         As :func:`supportless.slicer.slice_support`.
     """
-    choice = result.choice
-    if choice is None:
-        candidates, rest_mm = candidate_answers(rig, result, per_kind)
-        index, reason = choose_by_model(np.array([c.predicted_mm for c in candidates]),
-                                        np.array([c.result.value for c in candidates]), rest_mm)
-        choice = Choice(candidates, index, "model", reason, rest_mm, 60.0, up=np.asarray(rig.up, np.float64))
+    choice = result.choice or choose(rig, result, per_kind, height_mm=height_mm).choice
     picked = to_slice(choice, count, window)
     if len(picked) < 2:
         reason = (f"{choice.reason}; no other answer is predicted within {100 * window:g} % of the rest pose's "
@@ -219,7 +215,7 @@ def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float 
     return [result] + [measured_at(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
 
 
-def slice_choice_if_found(rig: Rig, result: PoseResult, height_mm: float = 60.0,
+def slice_choice_if_found(rig: Rig, result: PoseResult, height_mm: float = DEFAULT_HEIGHT_MM,
                           on_failure: Callable[[str], None] | None = None) -> PoseResult:
     """:func:`slice_choice` with :data:`SLICE_RANK` answers when PrusaSlicer is found, as the default makes it.
 

@@ -97,7 +97,7 @@ def test_the_model_choice_stays_within_the_slicer_noise(branch_rig, found):
     fake, _ = _fake_slicer(support_of)
     chosen = slice_choice(branch_rig, found, 10, window=1e9, slice_fn=fake)
     assert chosen.choice.chosen == choice.model_chosen and "kept" in chosen.choice.reason
-    assert pick_sliced([4, 2], [100.0, 50.0]) [0] == 2
+    assert pick_sliced([4, 2], [100.0, 50.0])[0] == 2
     assert pick_sliced([4, 2], [100.0, 100.0])[0] == 4
 
 
