@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from .crash import advice, last_stage, recording_stages, stage
 from .errors import InputError, SupportlessError
 from .interrupt import pause_point
 from .io import MESH_FORMATS, atomic_path, write_json
@@ -42,6 +43,13 @@ COLUMNS = ("model", "status", "reason", "predicted_before_mm", "predicted_after_
 
 #: Environment of each local worker: one thread for the BLAS, as each worker is one core (numba's: :func:`_one_numba_thread`).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+#: How often the local scheduler retries a model whose worker died under it: a crash in native code
+#: comes back on the same model, so it is not retried (the row says the stage instead).
+WORKER_RETRIES = 0
+
+#: The file in a model's scratch folder naming the stage its worker is in.
+STAGE_FILE = "stage"
 
 
 @dataclass(frozen=True)
@@ -106,13 +114,35 @@ def _failed(name: str, reason: str, seconds: float) -> dict:
     return {"model": name, "status": "failed", "reason": reason, "seconds": round(seconds, 2)}
 
 
-def _row_of(future, name: str) -> dict:
-    """A finished task's row; a worker that died under it (a crash in native code) is a failed row too."""
+def _row_of(future, name: str, out: str | os.PathLike) -> dict:
+    """A finished task's row; a worker that died under it (a crash in native code) is a failed row too.
+
+    The dead worker's scratch folder still holds the stage it had reached
+    (:func:`supportless.crash.recording_stages`): the row says it, with what
+    to try, and the folder is removed.
+    """
     try:
         return future.result()
     except Exception as exc:  # noqa: BLE001 - run_model never raises: this is its worker dying (KilledWorker)
-        return _failed(name, f"the worker posing it died ({type(exc).__name__}: a crash in native code, such as "
-                             "TetGen or CGAL, on this model)", 0.0)
+        where = _dead_stage(Path(out), name)
+        what = "run the batch without --slice-check" if where == "slicing" else advice(where)
+        return _failed(name, f"the worker posing it died while {where} ({type(exc).__name__}: a crash in native "
+                             f"code or out of memory); {what}", 0.0)
+
+
+def _scratch_of(out: Path, name: str) -> list[Path]:
+    """The scratch folders of model ``name`` in ``out`` (``.NAME.*``; a name may hold ``[ ] * ?``)."""
+    return list(out.glob(glob.escape(f".{name}.") + "*"))
+
+
+def _dead_stage(out: Path, name: str) -> str:
+    """The stage recorded in the newest scratch folder a dead worker left for ``name``; those folders go."""
+    left = sorted((p for p in _scratch_of(out, name) if (p / STAGE_FILE).exists()),
+                  key=lambda p: (p / STAGE_FILE).stat().st_mtime)
+    where = last_stage(left[-1] / STAGE_FILE) if left else "starting"
+    for folder in left:
+        shutil.rmtree(folder, ignore_errors=True)
+    return where
 
 
 def _umask() -> int:
@@ -172,7 +202,9 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
     work = Path(tempfile.mkdtemp(prefix=f".{spec.name}.", dir=out))
     os.chmod(work, 0o777 & ~_umask())  # mkdtemp's 0700 would become the model folder's
     try:
-        row = _pose_into(spec, work, settings, up, height_mm, cache_dir, slice_check)
+        with recording_stages(work / STAGE_FILE):  # read by the batch if this worker dies
+            row = _pose_into(spec, work, settings, up, height_mm, cache_dir, slice_check)
+        (work / STAGE_FILE).unlink(missing_ok=True)
         row["seconds"] = round(time.perf_counter() - t0, 2)
         write_json(work / "row.json", row)
         pause_point(f"rename {spec.name}/")
@@ -203,13 +235,17 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     from .search import optimize
     from .settings import SearchSettings
 
+    stage("preparing the rig")
     rig = load_rig(spec.mesh, spec.skeleton, up, cache_dir=cache_dir)
     frame = rig_print_frame(rig, height_mm)
+    stage("searching")
     result = optimize(rig, SearchSettings.from_dict(settings))
     if slice_check and result.choice is not None:  # PrusaSlicer chooses among the answers, as optimize does
         from .ranking import SLICE_RANK, slice_choice
 
+        stage("slicing")
         result = slice_choice(rig, result, SLICE_RANK, height_mm=frame.height_mm)
+    stage("writing")
     report = build_report(rig, result, frame)
     stl = folder / f"{spec.name}.stl"
     write_mesh(stl, frame.place(result.print_vertices), rig.faces)
@@ -225,6 +261,7 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     if slice_check and rig.dim == 3:
         from .slicer import slice_check as slice_pair
 
+        stage("slicing")
         sliced = slice_pair((frame.place(rig.vertices), rig.faces), stl, up=(0.0, 0.0, 1.0), height_mm=None).to_dict()
         report["slice_check"] = sliced | {"sliced_file": stl.name}
         report["support"] = support_headline(report)
@@ -284,9 +321,12 @@ def _client(scheduler: str | None, workers: int | None):
             return Client(scheduler, timeout="20s"), None
         except (OSError, TimeoutError) as exc:
             raise InputError(None, f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+    import dask
+
     n = workers or os.cpu_count() or 1
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, env=WORKER_ENV,
-                           dashboard_address=None, silence_logs=40)
+    with dask.config.set({"distributed.scheduler.allowed-failures": WORKER_RETRIES}):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, env=WORKER_ENV,
+                               dashboard_address=None, silence_logs=50)  # rows say what failed
     return Client(cluster), cluster
 
 
@@ -322,7 +362,7 @@ def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     for spec in specs:  # scratch folders of a run that was killed
-        for stale in out.glob(glob.escape(f".{spec.name}.") + "*"):  # a name may hold [ ] * ?
+        for stale in _scratch_of(out, spec.name):
             shutil.rmtree(stale, ignore_errors=True)
     for own in ("summary.csv", "contact_sheet.png"):  # and its half-written files: this run owns the folder
         for stale in out.glob(f".{Path(own).stem}.*{Path(own).suffix}"):
@@ -350,7 +390,7 @@ def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict 
                                              pure=False))
                 names[futures[-1].key] = spec.name
             for future in as_completed(futures):
-                row = _row_of(future, names[future.key])
+                row = _row_of(future, names[future.key], out)
                 rows[row["model"]] = row
                 write_summary(out, list(rows.values()))
                 if on_result is not None:

@@ -11,22 +11,36 @@ through a pipe; the parent only waits. When the child dies of a signal the
 parent prints one line naming the signal and the last stage, and exits with
 :data:`EXIT_CRASHED` (the out-of-memory killer's SIGKILL is said as such).
 Ctrl-C reaches both; the parent leaves it to the child.
+
+A batch worker has no supervising parent of its own: there :func:`stage` also
+writes the stage into a file (:func:`recording_stages`) that the batch reads
+when the worker dies (:func:`last_stage`). For the tests, ``$SUPPORTLESS_CRASH_AT``
+naming a stage makes :func:`stage` abort the process there, as native code would.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
-from typing import Callable
+from pathlib import Path
+from typing import Callable, Iterator
 
-__all__ = ["EXIT_CRASHED", "STAGE_ENV", "stage", "supervised"]
+__all__ = ["CRASH_ENV", "EXIT_CRASHED", "STAGE_ENV", "advice", "last_stage", "recording_stages", "stage",
+           "supervised"]
 
 #: Exit status of a command whose process died in native code (sysexits' EX_SOFTWARE).
 EXIT_CRASHED = 70
 
 #: The file descriptor :func:`stage` writes to, set by :func:`supervised` for its child.
 STAGE_ENV = "SUPPORTLESS_STAGE_FD"
+
+#: A stage named here aborts the process when reached (the tests' stand-in for a crash in native code).
+CRASH_ENV = "SUPPORTLESS_CRASH_AT"
+
+#: The file :func:`stage` also writes to, inside :func:`recording_stages`.
+_record: dict[str, Path | None] = {"file": None}
 
 #: What to try, by the last stage the command reached.
 _ADVICE = {
@@ -38,14 +52,45 @@ _ADVICE = {
 
 
 def stage(name: str) -> None:
-    """Tell the supervising parent (if any) that the command now does ``name``; otherwise nothing."""
+    """Tell the supervising parent (if any), and the stage file (if any), that the command now does ``name``."""
+    line = name.replace("\n", " ")
     fd = os.environ.get(STAGE_ENV)
-    if not fd:
-        return
+    if fd:
+        try:
+            os.write(int(fd), (line + "\n").encode())
+        except (OSError, ValueError):  # no parent listening: nothing to tell
+            pass
+    if _record["file"] is not None:
+        try:
+            _record["file"].write_text(line + "\n")
+        except OSError:  # the stage is a courtesy: never the reason a run fails
+            pass
+    if os.environ.get(CRASH_ENV) == name:
+        os.abort()
+
+
+@contextlib.contextmanager
+def recording_stages(path: str | os.PathLike) -> Iterator[None]:
+    """Inside, :func:`stage` also writes the current stage into ``path`` (read by :func:`last_stage`)."""
+    before = _record["file"]
+    _record["file"] = Path(path)
     try:
-        os.write(int(fd), (name.replace("\n", " ") + "\n").encode())
-    except (OSError, ValueError):  # no parent listening: nothing to tell
-        pass
+        yield
+    finally:
+        _record["file"] = before
+
+
+def last_stage(path: str | os.PathLike) -> str:
+    """The stage a process recorded in ``path`` before it died, or ``"starting"`` when it recorded none."""
+    try:
+        return Path(path).read_text().strip() or "starting"
+    except OSError:
+        return "starting"
+
+
+def advice(where: str) -> str:
+    """What to try when native code crashed while ``where`` (a :func:`stage` name)."""
+    return _ADVICE.get(where, "run it again with -v and report the model")
 
 
 def supervised(command: Callable[[], object]) -> int:
@@ -103,8 +148,7 @@ def supervised(command: Callable[[], object]) -> int:
     where = last[-1] if last else "starting"
     name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else f"signal {sig}"
     why = "killed (SIGKILL: out of memory?)" if sig == signal.SIGKILL else f"crashed in native code ({name})"
-    advice = _ADVICE.get(where, "run it again with -v and report the model")
-    sys.stderr.write(f"supportless: error: the command {why} while {where}; {advice}\n")
+    sys.stderr.write(f"supportless: error: the command {why} while {where}; {advice(where)}\n")
     sys.stderr.flush()
     return EXIT_CRASHED
 

@@ -205,7 +205,7 @@ def test_a_worker_uses_one_numba_thread_and_numba_accepts_its_environment_again(
             os.environ["NUMBA_NUM_THREADS"] = env
 
 
-def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback():
+def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback(tmp_path):
     from distributed.scheduler import KilledWorker
 
     from supportless.batch import _row_of
@@ -218,9 +218,37 @@ def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback():
         def result(self):
             return {"model": "Y", "status": "ok"}
 
-    row = _row_of(Died(), "X")
-    assert row["model"] == "X" and row["status"] == "failed" and "died" in row["reason"]
-    assert _row_of(Done(), "Y") == {"model": "Y", "status": "ok"}
+    (tmp_path / ".X.old").mkdir()
+    (tmp_path / ".X.old" / "stage").write_text("preparing the rig\n")
+    (tmp_path / ".X.new").mkdir()
+    (tmp_path / ".X.new" / "stage").write_text("searching\n")
+    os.utime(tmp_path / ".X.old" / "stage", (1, 1))  # the newest scratch is the stage of the last attempt
+    row = _row_of(Died(), "X", tmp_path)
+    assert row["model"] == "X" and row["status"] == "failed" and "died while searching" in row["reason"]
+    assert "--backend numpy" in row["reason"] and not list(tmp_path.iterdir())  # what to try; the scratch is gone
+    assert "died while starting" in _row_of(Died(), "X", tmp_path)["reason"]
+    assert _row_of(Done(), "Y", tmp_path) == {"model": "Y", "status": "ok"}
+
+
+@pytest.mark.parametrize("where", ["preparing the rig", "searching"])
+def test_a_worker_that_aborts_in_native_code_is_a_failed_row_naming_the_stage(tmp_path, monkeypatch, where):
+    """A real worker process calls os.abort() at a stage: the batch goes on, its row says where and what to try."""
+    from supportless.cli import main
+    from supportless.crash import CRASH_ENV, advice
+
+    d = tmp_path / "in"
+    d.mkdir()
+    V, F, J, B = sl.demo_figure("branch")[:4]
+    sl.write_mesh(d / "branch.obj", V, F)
+    sl.write_tgf(d / "branch.tgf", J, B)
+    monkeypatch.setenv(CRASH_ENV, where)
+    result = CliRunner().invoke(main, ["batch", str(d), "-o", str(tmp_path / "out"), "--workers", "1",
+                                       "--particles", "4", "--iterations", "1", "--orient", "keep", "-q",
+                                       "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code != 0 and "Traceback" not in result.output
+    (row,) = list(csv.DictReader((tmp_path / "out" / "summary.csv").open()))
+    assert row["status"] == "failed" and f"died while {where}" in row["reason"] and advice(where) in row["reason"]
+    assert not [p for p in (tmp_path / "out").iterdir() if p.name.startswith(".")]  # no scratch left
 
 
 def test_a_rerun_removes_what_a_killed_run_left_even_under_names_with_brackets(tmp_path):
