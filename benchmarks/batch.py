@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import models
+
 import supportless as sl
 
 

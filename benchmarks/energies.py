@@ -17,12 +17,11 @@ import time
 
 import numba
 import numpy as np
+from models import DATA
 
 import supportless as sl
-from models import DATA
+from supportless.base.kinematics import skin
 from supportless.energies.arap import arap_energy
-from supportless.kinematics import skin
-
 
 
 def best_of(fn, repeat):

@@ -42,17 +42,17 @@ import sys
 import time
 from pathlib import Path
 
+import models
 import numpy as np
 from scipy.optimize import minimize, nnls
 
-import models
 import supportless as sl
-from supportless.energies import slicer_model
+from supportless.base.geometry import place_on_plate, print_pose
 from supportless.copyleft.cgal import intersecting_face_pairs
-from supportless.geometry import place_on_plate, print_pose
-from supportless.profile import default_profile, overhang_threshold, read_printer_profile
-from supportless.ranking import distinct_poses
-from supportless.slicer import find_prusa_slicer, scale_for_height, slice_support
+from supportless.energies import slicer_model
+from supportless.files.printer import default_profile, overhang_threshold, read_printer_profile
+from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
+from supportless.slicing.ranking import distinct_poses
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_SAMPLES = ROOT / "benchmarks" / "slicer_samples.jsonl"

@@ -29,11 +29,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+from models import DATA
 
 import supportless as sl
-from models import DATA
-from supportless.report import build_report, write_pictures
-from supportless.slicer import slice_check
+from supportless.report.report import build_report, write_pictures
+from supportless.slicing.prusaslicer import slice_check
 
 HEADING = "## glTF characters"
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,7 +43,7 @@ def run(path: Path, cache_dir: str) -> dict:
     """Prepare, search and slice one asset; returns the figures of one table row."""
     t0 = time.perf_counter()
     from supportless.copyleft.cgal import intersecting_face_pairs
-    from supportless.gltf import read_gltf_skin
+    from supportless.files.gltf import read_gltf_skin
 
     rest = read_gltf_skin(path).vertices
     height_m = float(np.ptp(rest[:, 1]))

@@ -1,7 +1,7 @@
 """Peak memory of the search against the swarm size, with and without measuring the swarm in chunks.
 
 Each run is its own Python process (the bunny, ``--orient keep``, 3 iterations: memory, not time): the
-peak resident memory with :data:`supportless.objective.POSE_CHUNK` as it is and with chunking switched off.
+peak resident memory with :data:`supportless.search.objective.POSE_CHUNK` as it is and with chunking switched off.
 
     python benchmarks/memory.py [--particles 200 1000 5000]
 """
@@ -18,7 +18,7 @@ from models import DATA
 CHILD = r"""
 import json, resource, sys
 import supportless as sl
-import supportless.objective as ob
+import supportless.search.objective as ob
 particles, chunk, mesh, skeleton = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3], sys.argv[4]
 if chunk == 0:
     ob.POSE_CHUNK = 10 ** 9

@@ -3,7 +3,7 @@
 For each model and seed, :func:`supportless.optimize` runs with the tool's
 defaults and ``optimizer="pso"`` and ``optimizer="cma"`` (same particles and
 iterations words: CMA-ES samples a fifth of the swarm's poses, see
-:data:`supportless.search.CMA_SHARE`). Each iteration's best value is recorded
+:data:`supportless.search.optimizer.CMA_SHARE`). Each iteration's best value is recorded
 with its wall time (``--curves`` draws them). Prints a Markdown table: the final
 objective, support and distortion terms, exact intersecting pairs of the result
 and the time, per optimizer, and the mean over seeds.
@@ -22,11 +22,11 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 import models
-import supportless as sl
+import numpy as np
 from models import SHARED, available
+
+import supportless as sl
 from supportless.copyleft.cgal import intersecting_face_pairs
 
 OPTIMIZERS = ("pso", "cma")

@@ -6,7 +6,7 @@ planar woody, in one run:
 
 1. **rest** — the rest pose, printed as it stands;
 2. **turning only** — the rest pose turned: the candidate printing directions
-   (:func:`supportless.orientation.seed_params`), the ``--slice-best`` best by
+   (:func:`supportless.search.orientation.seed_params`), the ``--slice-best`` best by
    the prism estimate sliced, the cheapest of them and upright kept (what a
    user with an auto-orienter gets, with the slicer as the judge);
 3. **pose only** — ``optimize(orient="keep")``, printed as it stands;
@@ -14,16 +14,16 @@ planar woody, in one run:
    search's own best (the default before issue 32; the first answer the choice
    weighs, so its time is (5)'s less the choice's);
 5. **model's choice** — ``optimize()`` without a slicer: the answer with the
-   least predicted support (:func:`supportless.choice.choose`);
+   least predicted support (:func:`supportless.search.choice.choose`);
 6. **default** — the same with PrusaSlicer found: the answers
-   :func:`supportless.ranking.to_slice` picks are sliced and
-   :func:`supportless.ranking.pick_sliced` chooses, as ``supportless optimize``
+   :func:`supportless.slicing.ranking.to_slice` picks are sliced and
+   :func:`supportless.slicing.ranking.pick_sliced` chooses, as ``supportless optimize``
    does (every answer of the choice is sliced once here, so the table also
    shows what each would have cost).
 
 Every mesh is sliced once with PrusaSlicer's defaults and supports, the
 support read from the G-code's support features
-(:func:`supportless.slicer.slice_support` with ``by_feature``), the model 60 mm
+(:func:`supportless.slicing.prusaslicer.slice_support` with ``by_feature``), the model 60 mm
 tall as it stands (the turned meshes scaled by the same factor). A planar
 figure is extruded to a slab 1/10 of its height thick. Prints a Markdown table
 and writes it as the "## Pose and orientation" section of ``--out``.
@@ -43,15 +43,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+from models import DATA, SHARED, available, load
 
 import supportless as sl
-from models import DATA, SHARED, available, load
+from supportless.base.geometry import print_pose
 from supportless.energies.surface import boundary_edges
-from supportless.geometry import print_pose
-from supportless.orientation import rotations_from_params, seed_params
-from supportless.ranking import SLICE_RANK, SLICE_WINDOW, pick_sliced, to_slice
-from supportless.report import reduction
-from supportless.slicer import scale_for_height, slice_support
+from supportless.report.report import reduction
+from supportless.search.orientation import rotations_from_params, seed_params
+from supportless.slicing.prusaslicer import scale_for_height, slice_support
+from supportless.slicing.ranking import SLICE_RANK, SLICE_WINDOW, pick_sliced, to_slice
 
 HEADING = "## Pose and orientation"
 PLANAR = ("woody",)

@@ -22,10 +22,11 @@ import sys
 import time
 from pathlib import Path
 
-import supportless as sl
 from models import available, load
-from supportless.report import build_report, write_pictures
-from supportless.slicer import find_prusa_slicer, slice_check
+
+import supportless as sl
+from supportless.report.report import build_report, write_pictures
+from supportless.slicing.prusaslicer import find_prusa_slicer, slice_check
 
 ROOT = Path(__file__).resolve().parents[1]
 

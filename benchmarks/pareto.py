@@ -19,13 +19,13 @@ import sys
 import time
 from pathlib import Path
 
+import models
 import numpy as np
 
-import models
 import supportless as sl
-from supportless.pareto import pareto_front
-from supportless.report import predicted_slicer
-from supportless.slicer import find_prusa_slicer, scale_for_height, slice_support
+from supportless.apps.pareto import pareto_front
+from supportless.report.report import predicted_slicer
+from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
 
 
 def hypervolume(support, distortion, reference) -> float:
@@ -60,7 +60,7 @@ def run(name, count, gallery, methods):
         hv = hypervolume(s / rest_pred, d / d_max, (1.0, 1.0))
         low, high = mm[2 + 2 * k], mm[3 + 2 * k]
         if gallery:
-            from supportless.pareto import write_front
+            from supportless.apps.pareto import write_front
 
             write_front(rig, front, Path(gallery) / f"{name}-{method}.stl")
         print(f"| {name} | {method} | {single_s:.1f} s | {front.seconds:.1f} s ({front.seconds / single_s:.2f}x) "

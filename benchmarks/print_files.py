@@ -35,9 +35,9 @@ from pathlib import Path
 
 import numpy as np
 
-from supportless.io import read_mesh
-from supportless.posefile import write_pose
-from supportless.slicer import PRESETS, SUPPORT_OPTIONS, find_prusa_slicer
+from supportless.files.meshes import read_mesh
+from supportless.files.posefile import write_pose
+from supportless.slicing.prusaslicer import PRESETS, SUPPORT_OPTIONS, find_prusa_slicer
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("SUPPORTLESS_SHARED_DATA", ROOT.parent / "shared" / "data"))

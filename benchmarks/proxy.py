@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import igl
 import numpy as np
-
 from models import DATA
-from supportless.bench import random_poses
-from supportless.io import read_mesh, read_tgf
-from supportless.rig import prepare_rig
-from supportless.settings import SearchSettings
+
+from supportless.apps.bench import random_poses
+from supportless.files.meshes import read_mesh, read_tgf
+from supportless.rig.rig import prepare_rig
+from supportless.search.settings import SearchSettings
 from supportless.shapes.character import character
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import argparse
 
-from supportless.bench import run_bench
+from supportless.apps.bench import run_bench
 
 
 def main():

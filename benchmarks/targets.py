@@ -1,6 +1,6 @@
 """The speed targets (``supportless bench --targets``), written into RESULTS.md.
 
-Runs :func:`supportless.bench_targets.run_targets` (each case in its own
+Runs :func:`supportless.apps.bench_targets.run_targets` (each case in its own
 process, empty rig cache, numba warmed up) and, with ``--out FILE``, replaces
 the "## Speed targets" section of FILE with the table.
 
@@ -15,7 +15,7 @@ import re
 import sys
 from pathlib import Path
 
-from supportless.bench_targets import CASES, format_table, run_targets
+from supportless.apps.bench_targets import CASES, format_table, run_targets
 
 HEADING = "## Speed targets"
 

@@ -2,7 +2,7 @@
 
 For each model: ``supportless.optimize(rig, SearchSettings())`` (the tool's
 defaults unless ``--particles/--iterations/--seed`` say otherwise), the report
-of :func:`supportless.report.build_report`, and PrusaSlicer on the rest and
+of :func:`supportless.report.report.build_report`, and PrusaSlicer on the rest and
 the found pose (60 mm tall, its default print settings). Prints a Markdown
 table, writes it as the "## Zoo" section of ``--out`` (replacing an older one),
 and draws a contact sheet of before/after pictures (``--sheet``, default
@@ -25,14 +25,14 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 import models
-import supportless as sl
+import numpy as np
 from models import DATA, SHARED, available
-from supportless.kinematics import euler_to_matrix
-from supportless.report import build_report, write_pictures
-from supportless.slicer import SlicerError, slice_check
+
+import supportless as sl
+from supportless.base.kinematics import euler_to_matrix
+from supportless.report.report import build_report, write_pictures
+from supportless.slicing.prusaslicer import SlicerError, slice_check
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADING = "## Zoo"
@@ -61,7 +61,7 @@ def largest_rotation_deg(report: dict, angles: np.ndarray) -> float:
     Parameters
     ----------
     report : dict
-        From :func:`~supportless.report.build_report`.
+        From :func:`~supportless.report.report.build_report`.
     angles : (m, 3) float64
         Relative XYZ Euler angles of the found pose, radians.
 

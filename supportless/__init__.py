@@ -5,26 +5,26 @@ The pipeline (see the README): a closed surface and its skeleton become a
 bone pose it by linear blend skinning; three energies of the posed surface
 (ARAP distortion, overhang support, self-intersection volume) make the
 :class:`Objective`; :func:`optimize` searches the rotations with a particle
-swarm, as :class:`SearchSettings` say; :mod:`supportless.report` measures and
+swarm, as :class:`SearchSettings` say; :mod:`supportless.report.report` measures and
 draws the result.
 """
 
-from . import numba_cache
+from .base import numba_cache
 
 numba_cache.configure()  # before numba is imported: a read-only install with no home still runs
 
+from .base.errors import InputError, SupportlessError
+from .base.kinematics import forward_kinematics, lbs_matrix, skin
 from .energies.arap import arap_energy, arap_energy_direct, arap_precompute
 from .energies.intersection import self_intersection_volume
 from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.support import support_volume
-from .errors import InputError, SupportlessError
-from .io import read_mesh, read_tgf, write_mesh, write_tgf
-from .posefile import read_pose, write_pose
-from .kinematics import forward_kinematics, lbs_matrix, skin
-from .objective import Objective
-from .rig import Rig, load_rig, prepare_rig
-from .search import PoseResult, optimize, particle_swarm
-from .settings import SearchSettings
+from .files.meshes import read_mesh, read_tgf, write_mesh, write_tgf
+from .files.posefile import read_pose, write_pose
+from .rig.rig import Rig, load_rig, prepare_rig
+from .search.objective import Objective
+from .search.optimizer import PoseResult, optimize, particle_swarm
+from .search.settings import SearchSettings
 from .shapes import DEMO_FIGURES, demo_figure
 
 __version__ = "0.1.0"

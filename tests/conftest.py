@@ -21,10 +21,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from meshes import box
 
 import supportless as sl
-
-from meshes import box
 
 SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 
@@ -70,8 +69,8 @@ def shared_file(shared_data):
 
 @pytest.fixture(scope="session")
 def prusa_slicer() -> str:
-    """Path of the PrusaSlicer executable (:func:`supportless.slicer.find_prusa_slicer`)."""
-    from supportless.slicer import ENV_VAR, find_prusa_slicer
+    """Path of the PrusaSlicer executable (:func:`supportless.slicing.prusaslicer.find_prusa_slicer`)."""
+    from supportless.slicing.prusaslicer import ENV_VAR, find_prusa_slicer
 
     exe = find_prusa_slicer()
     if exe is None:
@@ -149,7 +148,7 @@ def bad_inputs(tmp_path_factory, branch_files, branch_rig, box_surface) -> dict:
     ``culprit`` is the file the message must name and ``fragments`` are
     substrings the message must contain.
     """
-    from supportless.io import write_dmat, write_tet_mesh
+    from supportless.files.meshes import write_dmat, write_tet_mesh
 
     d = tmp_path_factory.mktemp("bad-inputs")
     V, F, J, B = (branch_files[k] for k in ("V", "F", "joints", "bones"))
@@ -230,7 +229,7 @@ def dense_branch():
     """The branch figure subdivided twice, prepared with the proxy thresholds lowered to its size: (rig, target)."""
     import igl
 
-    from supportless import rig as rig_mod
+    from supportless.rig import rig as rig_mod
 
     V, F, J, B = sl.demo_figure("branch")
     V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
@@ -247,7 +246,7 @@ def dense_branch():
 @pytest.fixture(scope="module")
 def branch_app(branch_rig, tmp_path_factory):
     """The browser app of the branch figure on a free local port, for one test module."""
-    from supportless.ui import App
+    from supportless.apps.ui import App
 
     a = App(branch_rig, verbose=False, workdir=tmp_path_factory.mktemp("app"))
     assert a.wait_idle(60)

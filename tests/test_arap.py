@@ -4,9 +4,9 @@ import igl
 import igl.copyleft.tetgen
 import numpy as np
 import pytest
+from meshes import box
 from scipy.spatial.transform import Rotation
 
-from meshes import box
 from supportless.energies.arap import (
     ArapData,
     _rotation_terms,

@@ -86,40 +86,70 @@ def test_no_module_imports_the_package_front_door():
     assert list(graph.predecessors("supportless")) == []
 
 
-# each layer may import only layers listed before it (data flows rig -> energies -> ... -> cli/ui)
-LAYERS = [
-    {"supportless.errors", "supportless.geometry", "supportless.interrupt", "supportless.terminal",
-     "supportless.numba_cache", "supportless.printframe", "supportless.isolated", "supportless.copyleft", "supportless.scratch",
-     "supportless.crash"},
-    {"supportless.skeleton", "supportless.paths", "supportless.repair"},
-    {"supportless.io", "supportless.posefile", "supportless.threemf", "supportless.gcode", "supportless.profile", "supportless.joints", "supportless.printbody", "supportless.kinematics", "supportless.tetmesh",
-     "supportless.gltf", "supportless.gltf_decode", "supportless.shapes", "supportless.weights"},
-    {"supportless.rig", "supportless.rigcache", "supportless.energies"},
-    {"supportless.standing", "supportless.prior", "supportless.symmetry", "supportless.orientation"},
-    {"supportless.objective"},
-    {"supportless.settings"},
-    {"supportless.result", "supportless.search", "supportless.candidates", "supportless.choice"},
-    {"supportless.render", "supportless.report"},
-    {"supportless.slicer", "supportless.bench"},
-    {"supportless.ranking", "supportless.pareto", "supportless.batch", "supportless.bench_targets"},
-    {"supportless.cli_common"},
-    {"supportless.cli_batch"},
-    {"supportless.cli", "supportless.ui"},
+# The stages, in the order data flows: a module imports only its own stage and the stages before it.
+# A stage is one folder (two when they belong together); each folder's __init__ says what it holds.
+STAGES = [
+    ("base", "copyleft"),
+    ("files",),
+    ("shapes", "rig"),
+    ("energies",),
+    ("search",),
+    ("report",),
+    ("slicing",),
+    ("apps",),
 ]
+FOLDERS = [folder for stage in STAGES for folder in stage]
 
 
-def layer_of(name: str) -> int:
-    for i, layer in enumerate(LAYERS):
-        if any(name == m or name.startswith(m + ".") for m in layer):
+def stage_of(name: str) -> int:
+    """The index in :data:`STAGES` of module ``supportless.FOLDER...``."""
+    folder = name.split(".")[1]
+    for i, stage in enumerate(STAGES):
+        if folder in stage:
             return i
-    raise AssertionError(f"{name} is in no layer of this test: add it where it belongs")
+    raise AssertionError(f"{name} is in no stage folder: put it in one of {FOLDERS}")
+
+
+def test_every_module_is_in_a_stage_folder():
+    loose = [name for name, path in modules().items() if name != "supportless" and path.parent == PACKAGE]
+    assert not loose, f"modules beside the stage folders: {loose}"
+    assert sorted(p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()) == sorted(FOLDERS)
 
 
 @pytest.mark.parametrize("name", sorted(set(modules()) - {"supportless"}))
-def test_imports_point_down_the_layers(name):
+def test_imports_point_down_the_stages(name):
     graph = import_graph()
     for target in graph.successors(name):
-        assert layer_of(target) <= layer_of(name), f"{name} imports {target}, a later stage"
+        assert stage_of(target) <= stage_of(name), f"{name} imports {target}, a later stage"
+
+
+def folder_summary(folder: str) -> str:
+    """The first line of a stage folder's ``__init__`` docstring."""
+    doc = ast.get_docstring(ast.parse((PACKAGE / folder / "__init__.py").read_text()))
+    assert doc, f"supportless/{folder}/__init__.py says nothing of what the folder holds"
+    return doc.splitlines()[0]
+
+
+def layout_block() -> str:
+    """The README's Layout block: each stage folder with what it holds and its modules, in the stages' order."""
+    import textwrap
+
+    out = []
+    for folder in FOLDERS:
+        names = sorted(p.stem if p.suffix else p.name + "/" for p in (PACKAGE / folder).iterdir()
+                       if (p.suffix == ".py" and p.stem != "__init__") or (p / "__init__.py").exists())
+        out.append(f"{folder + '/':<11} {folder_summary(folder)}")
+        out += textwrap.wrap(", ".join(names), 108, initial_indent=" " * 12, subsequent_indent=" " * 12)
+    return "\n".join(out)
+
+
+def test_the_readme_layout_is_the_stages():
+    """The README's Layout block is :func:`layout_block` (print it with ``python tests/test_architecture.py``)."""
+    readme = (PACKAGE.parent / "README.md").read_text()
+    start = readme.index("## Layout")
+    begin = readme.index("```text\n", start) + len("```text\n")
+    block = readme[begin: readme.index("\n```", begin)]
+    assert block == layout_block(), "the README's Layout block has drifted: paste python tests/test_architecture.py"
 
 
 def test_energies_are_arrays_in_arrays_out():
@@ -128,8 +158,8 @@ def test_energies_are_arrays_in_arrays_out():
     for name in graph:
         if name.startswith("supportless.energies"):
             for target in graph.successors(name):
-                assert target.startswith("supportless.energies") or target in ("supportless.geometry",
-                                                                                 "supportless.errors"), (name, target)
+                assert target.startswith("supportless.energies") or target in ("supportless.base.geometry",
+                                                                                 "supportless.base.errors"), (name, target)
 
 
 def external_imports(path: Path) -> set[str]:
@@ -152,7 +182,7 @@ def test_licence_sensitive_calls_stay_in_one_module_each():
         for key in where:
             if key in imported:
                 where[key].add(name)
-    assert where == {"igl.copyleft.tetgen": {"supportless.copyleft.tetgen"}, "igl.triangle": {"supportless.tetmesh"},
+    assert where == {"igl.copyleft.tetgen": {"supportless.copyleft.tetgen"}, "igl.triangle": {"supportless.rig.tetmesh"},
                      "igl.copyleft.cgal": {"supportless.copyleft.cgal"}}
 
 
@@ -160,3 +190,7 @@ def test_no_module_is_a_room_of_many_ideas():
     """No module over 700 lines: split one that grows past it."""
     long = {name: n for name, path in modules().items() if (n := len(path.read_text().splitlines())) > 700}
     assert not long, long
+
+
+if __name__ == "__main__":
+    print(layout_block())

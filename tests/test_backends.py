@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.bench import random_poses
+from supportless.apps.bench import random_poses
 from supportless.energies.intersection import self_intersection_volume
 from supportless.energies.overhang import overhang_energy, risky_area, risky_faces
 from supportless.energies.support import support_volume

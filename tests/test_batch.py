@@ -17,7 +17,7 @@ import pytest
 from click.testing import CliRunner
 
 import supportless as sl
-from supportless.batch import COLUMNS, find_models, run_model
+from supportless.apps.batch import COLUMNS, find_models, run_model
 
 EXE = Path(sys.executable).with_name("supportless")
 FAST = ["--particles", "12", "--iterations", "3", "--orient", "keep"]
@@ -68,7 +68,7 @@ def test_meshes_sharing_a_name_are_one_failed_model(folder):
 
 
 def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path):
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     out = tmp_path / "out"
     args = ["batch", str(folder), "-o", str(out), "--workers", "2", "--cache-dir", str(tmp_path / "cache"), *FAST]
@@ -90,7 +90,7 @@ def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder,
 
 
 def test_a_model_that_fails_midway_leaves_no_folder_that_looks_finished(folder, tmp_path, monkeypatch):
-    import supportless.report as report
+    import supportless.report.report as report
 
     def crash(*args, **kwargs):
         raise RuntimeError("disk went away")
@@ -149,7 +149,7 @@ def test_killing_a_run_at_each_step_leaves_no_model_that_looks_finished(folder, 
     The steps: a model's scratch folder about to become its folder, the contact sheet and the summary about to
     be renamed into place. The kill lands at the step, not after a delay: the verdict never depends on timing.
     """
-    from supportless.interrupt import PAUSE_ENV
+    from supportless.base.interrupt import PAUSE_ENV
 
     out, marker = tmp_path / "out", tmp_path / "paused"
     proc = subprocess.Popen([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
@@ -188,7 +188,7 @@ def test_a_worker_uses_one_numba_thread_and_numba_accepts_its_environment_again(
     re-reads NUMBA_NUM_THREADS and refuses a different value once its threads run)."""
     import numba
 
-    from supportless.batch import _one_numba_thread
+    from supportless.apps.batch import _one_numba_thread
 
     before, env = numba.get_num_threads(), os.environ.get("NUMBA_NUM_THREADS")
     try:
@@ -208,7 +208,7 @@ def test_a_worker_uses_one_numba_thread_and_numba_accepts_its_environment_again(
 def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback(tmp_path):
     from distributed.scheduler import KilledWorker
 
-    from supportless.batch import _row_of
+    from supportless.apps.batch import _row_of
 
     class Died:
         def result(self):
@@ -233,8 +233,8 @@ def test_a_worker_that_dies_under_a_model_is_a_failed_row_not_a_traceback(tmp_pa
 @pytest.mark.parametrize("where", ["preparing the rig", "searching"])
 def test_a_worker_that_aborts_in_native_code_is_a_failed_row_naming_the_stage(tmp_path, monkeypatch, where):
     """A real worker process calls os.abort() at a stage: the batch goes on, its row says where and what to try."""
-    from supportless.cli import main
-    from supportless.crash import CRASH_ENV, advice
+    from supportless.apps.cli import main
+    from supportless.base.crash import CRASH_ENV, advice
 
     d = tmp_path / "in"
     d.mkdir()
@@ -253,7 +253,7 @@ def test_a_worker_that_aborts_in_native_code_is_a_failed_row_naming_the_stage(tm
 
 def test_a_rerun_removes_what_a_killed_run_left_even_under_names_with_brackets(tmp_path):
     """``a[1].obj``: its scratch ``.a[1].x/`` is not a glob character class; the sheet's and summary's temporaries go."""
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     d = tmp_path / "in"
     d.mkdir()

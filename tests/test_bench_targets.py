@@ -1,7 +1,7 @@
 """``supportless bench --targets``: the speed cases, their table and what happens without the shared data."""
 
 import supportless as sl
-from supportless import bench_targets as bt
+from supportless.apps import bench_targets as bt
 
 
 def test_a_case_is_measured_against_its_full_resolution_reference(dense_branch, monkeypatch):

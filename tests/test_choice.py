@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.choice import KINDS, choose_by_model, print_distance_deg
-from supportless.kinematics import euler_to_matrix
-from supportless.report import build_report
+from supportless.base.kinematics import euler_to_matrix
+from supportless.report.report import build_report
+from supportless.search.choice import KINDS, choose_by_model, print_distance_deg
 
 SMALL = {"particles": 40, "iterations": 15, "seed": 1}
 

@@ -16,9 +16,9 @@ import pytest
 from click.testing import CliRunner
 
 import supportless as sl
-from supportless.cli import main
-from supportless.geometry import place_on_plate
-from supportless.printframe import print_frame
+from supportless.apps.cli import main
+from supportless.base.geometry import place_on_plate
+from supportless.files.printframe import print_frame
 
 EXE = Path(sys.executable).with_name("supportless")
 
@@ -80,7 +80,7 @@ def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
     assert F.shape == branch_files["F"].shape
     assert V[:, 2].min() == pytest.approx(0.0, abs=1e-6)  # placed on the build plate, +Z up
     angles = sl.read_pose(out / "pose.json", branch_files["bones"])
-    from supportless.prior import joint_angles
+    from supportless.search.prior import joint_angles
 
     assert angles.shape == (3, 3)
     assert np.all(joint_angles(angles) <= np.radians(sl.SearchSettings().joint_limit) + 1e-9)
@@ -182,7 +182,7 @@ def _interrupt_at(monkeypatch, call, how):
     import signal
     import threading
 
-    from supportless.objective import Objective
+    from supportless.search.objective import Objective
 
     calls = {"n": 0}
     bounded = Objective.bounded_overlap  # what the swarm calls once per evaluation
@@ -239,12 +239,13 @@ def test_search_options_reach_the_search(branch_files, tmp_path):
     assert settings["overhang_model"] == "column" and settings["free"] == ["all"] and settings["w_arap"] == 3.0
     assert settings["fixed_bones"] == []
     default = run(*base, "--report", tmp_path / "default.json")
+    assert default.exit_code == 0, default.output
     settings = json.loads((tmp_path / "default.json").read_text())["settings"]
     assert settings["overhang_model"] == "prism" and settings["fixed_bones"] != []
 
 
 def test_precomputed_tets_and_weights(branch_files, branch_rig, tmp_path):
-    from supportless.io import write_dmat, write_tet_mesh
+    from supportless.files.meshes import write_dmat, write_tet_mesh
 
     write_tet_mesh(tmp_path / "b.mesh", branch_rig.tet_vertices, branch_rig.tets)
     W = branch_rig.tet_weights.copy()
@@ -328,7 +329,7 @@ def test_print_rotation_round_trips_through_apply(branch_files, tmp_path):
                  "--pose", tmp_path / "pose.json", "--report", tmp_path / "report.json")
     assert result.exit_code == 0, result.output
     rig = sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"])
-    R = sl.posefile.read_print_rotation(tmp_path / "pose.json", 3)
+    R = sl.files.posefile.read_print_rotation(tmp_path / "pose.json", 3)
     assert not np.allclose(R, np.eye(3))  # the branch is turned to print
     report = json.loads((tmp_path / "report.json").read_text())
     np.testing.assert_allclose(report["print_rotation"]["matrix"], R, atol=1e-12)
@@ -338,7 +339,7 @@ def test_print_rotation_round_trips_through_apply(branch_files, tmp_path):
     frame = print_frame(rig.vertices, rig.up)  # the files: +Z up, mm, the rest pose 60 mm tall
     upright = place_on_plate(rig.pose(angles), rig.up)
     np.testing.assert_allclose(standing, frame.place(upright), atol=1e-5)
-    np.testing.assert_allclose(printed, frame.place(sl.geometry.print_pose(upright, R, rig.up)), atol=1e-4)
+    np.testing.assert_allclose(printed, frame.place(sl.base.geometry.print_pose(upright, R, rig.up)), atol=1e-4)
     assert printed[:, 2].min() == pytest.approx(0.0, abs=1e-5)
     again = run("apply", *common, "--pose", tmp_path / "pose.json", "-o", tmp_path / "a-printed.obj",
                 "--upright-out", tmp_path / "a-standing.obj")
@@ -354,7 +355,7 @@ def test_orient_keep_writes_the_pose_standing(branch_files, tmp_path):
                  "--pose", tmp_path / "pose.json")
     assert result.exit_code == 0, result.output
     np.testing.assert_array_equal(sl.read_mesh(tmp_path / "printed.obj")[0], sl.read_mesh(tmp_path / "standing.obj")[0])
-    np.testing.assert_array_equal(sl.posefile.read_print_rotation(tmp_path / "pose.json", 3), np.eye(3))
+    np.testing.assert_array_equal(sl.files.posefile.read_print_rotation(tmp_path / "pose.json", 3), np.eye(3))
 
 
 def test_a_bad_print_rotation_is_one_line(branch_files, tmp_path):
@@ -426,7 +427,7 @@ def test_impossible_output_locations_are_refused_before_the_search(branch_files,
 
 def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(branch_files, tmp_path,
                                                                                monkeypatch):
-    import supportless.posefile as posefile
+    import supportless.files.posefile as posefile
 
     def full_disk(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
@@ -487,8 +488,8 @@ def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(bra
 def test_apply_on_a_full_disk_is_one_line_and_no_file(branch_files, tmp_path, monkeypatch):
     import errno
 
-    import supportless.io as sio
-    from supportless.cli_common import EXIT_WRITE_FAILED
+    import supportless.files.meshes as sio
+    from supportless.apps.cli_common import EXIT_WRITE_FAILED
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -508,9 +509,9 @@ def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, m
     """Disk full while demo writes its files, or while batch writes its contact sheet: one line, no traceback."""
     import errno
 
-    import supportless.batch as batch
-    import supportless.io as sio
-    from supportless.cli_common import EXIT_WRITE_FAILED
+    import supportless.apps.batch as batch
+    import supportless.files.meshes as sio
+    from supportless.apps.cli_common import EXIT_WRITE_FAILED
 
     def full(*args, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(tmp_path / "out" / "file"))

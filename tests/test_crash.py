@@ -10,7 +10,7 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="supervision for
 
 _CHILD = """
 import os, signal, sys
-from supportless.crash import stage, supervised
+from supportless.base.crash import stage, supervised
 
 def command():
     stage("preparing the rig")
@@ -29,7 +29,7 @@ def _run(how: str) -> subprocess.CompletedProcess:
 @pytest.mark.parametrize("how, signame", [("os.abort()", "SIGABRT"),
                                           ("os.kill(os.getpid(), signal.SIGSEGV)", "SIGSEGV")])
 def test_a_native_crash_is_one_line_with_the_stage_and_what_to_try(how, signame):
-    from supportless.crash import EXIT_CRASHED
+    from supportless.base.crash import EXIT_CRASHED
 
     done = _run(how)
     assert done.returncode == EXIT_CRASHED
@@ -55,8 +55,8 @@ def test_the_executable_is_the_supervised_command():
     from importlib.metadata import entry_points
 
     (script,) = [e for e in entry_points(group="console_scripts") if e.name == "supportless"]
-    assert script.value == "supportless.cli:run"
+    assert script.value == "supportless.apps.cli:run"
     done = subprocess.run([sys.executable, "-c", "import sys; sys.argv[0] = 'supportless'; "
-                           "from supportless.cli import run; run()", "optimize", "missing.obj", "-o", "x.stl"],
+                           "from supportless.apps.cli import run; run()", "optimize", "missing.obj", "-o", "x.stl"],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and done.stderr.startswith("supportless: error:"), done.stderr

@@ -2,10 +2,9 @@
 
 import numpy as np
 import pytest
+from meshes import box
 
 from supportless.copyleft.cgal import intersecting_face_pairs, intersecting_faces, self_intersects
-
-from meshes import box
 
 
 def test_a_closed_box_does_not_intersect_itself():

@@ -1,7 +1,7 @@
 """The readers under random and mutated input (issue 18): a result that holds, or one line of InputError.
 
 Every reader either returns arrays that keep their promises (finite, indices in range, a skeleton that
-is a tree) or raises :class:`~supportless.errors.InputError` with a one-line message naming the file;
+is a tree) or raises :class:`~supportless.base.errors.InputError` with a one-line message naming the file;
 never another exception, and never a hang: a read still running after :data:`HANG_SECONDS` (thousands of
 times what any example takes, so no load trips it) fails its example. Hypothesis's own per-example
 deadline is off: a busy machine made it fail examples that were merely slow.
@@ -20,8 +20,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import supportless as sl
-from supportless.errors import InputError
-from supportless.skeleton import check_skeleton
+from supportless.base.errors import InputError
+from supportless.files.skeleton import check_skeleton
 
 FUZZ = settings(max_examples=int(os.environ.get("SUPPORTLESS_FUZZ_EXAMPLES", "150")), deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow], derandomize=True)
@@ -166,7 +166,7 @@ def fox_bytes(shared_data):
 @given(cut=st.integers(0, 4000), flips=st.lists(st.tuples(st.integers(0, 3000), st.integers(0, 255)), max_size=6))
 def test_glb_reader(tmp_path, fox_bytes, cut, flips):
     """A real character's GLB, truncated and with bytes changed in its header and JSON."""
-    from supportless.gltf import read_gltf_skin
+    from supportless.files.gltf import read_gltf_skin
 
     data = bytearray(fox_bytes)
     for i, byte in flips:

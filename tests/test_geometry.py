@@ -2,11 +2,10 @@
 
 import numpy as np
 import pytest
-
-from supportless.errors import InputError
-from supportless.geometry import parse_up, place_on_plate, signed_volume
-
 from meshes import box
+
+from supportless.base.errors import InputError
+from supportless.base.geometry import parse_up, place_on_plate, signed_volume
 
 
 @pytest.mark.parametrize("up, expected", [("y", [0, 1, 0]), ("-z", [0, 0, -1]), ("X", [1, 0, 0]),
@@ -55,7 +54,7 @@ def test_place_on_plate_along_any_up():
 def test_print_pose_is_a_rigid_turn_onto_the_plate():
     from scipy.spatial.transform import Rotation
 
-    from supportless.geometry import print_pose, print_transform
+    from supportless.base.geometry import print_pose, print_transform
 
     rng = np.random.default_rng(0)
     V = rng.normal(size=(40, 3)) + [5.0, 3.0, -2.0]

@@ -1,4 +1,4 @@
-"""Rigged glTF/GLB input (supportless.gltf, supportless.rig.load_rig) on small synthetic files, one per mess.
+"""Rigged glTF/GLB input (supportless.files.gltf, supportless.rig.rig.load_rig) on small synthetic files, one per mess.
 
 Every file is written here with pygltflib: a column of three stacked segments
 along +Y (20 x 60 x 20 mm once read, the file's metres becoming millimetres),
@@ -22,22 +22,21 @@ import numpy as np
 import pygltflib
 import pytest
 from click.testing import CliRunner
+from meshes import box
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 import supportless as sl
-from supportless.cli import main
+from supportless.apps.cli import main
+from supportless.base.errors import InputError
+from supportless.base.geometry import signed_volume
 from supportless.copyleft.cgal import intersecting_face_pairs
-from supportless.errors import InputError
-from supportless.geometry import signed_volume
-from supportless.gltf import posed_joint_transforms, read_gltf_skin, write_posed_gltf
-from supportless.joints import skeleton_from_joints
-from supportless.io import check_closed_surface
-from supportless.printbody import WINDING_CELLS, print_body
-from supportless.rig import load_rig
-from supportless.settings import SearchSettings, resolve_fixed_bones
-
-from meshes import box
+from supportless.files.gltf import posed_joint_transforms, read_gltf_skin, write_posed_gltf
+from supportless.files.joints import skeleton_from_joints
+from supportless.files.meshes import check_closed_surface
+from supportless.files.printbody import WINDING_CELLS, print_body
+from supportless.rig.rig import load_rig
+from supportless.search.settings import SearchSettings, resolve_fixed_bones
 
 FLOAT, U8, U16, U32 = 5126, 5121, 5123, 5125
 
@@ -371,7 +370,7 @@ def character(*, helpers=False, root_below=False, rigid_hat=False, extra_parts=F
 
 
 # --------------------------------------------------------------------------- #
-# reading the written files back, independently of supportless.gltf
+# reading the written files back, independently of supportless.files.gltf
 # --------------------------------------------------------------------------- #
 def _blob(doc, path: Path) -> bytes:
     """The bytes of buffer 0 of a pygltflib document (GLB chunk or data URI)."""
@@ -429,7 +428,7 @@ def skinned_positions(path, normalise: bool = False, doc=None) -> np.ndarray:
     """All vertices of a glTF file as its nodes pose them: ``Σ w_j G_j IBM_j v``, rigid meshes ``G_node v``.
 
     Nodes in file order, primitives in mesh order (the order of
-    :attr:`supportless.gltf.GltfSkin.vertices`). With ``normalise``, each
+    :attr:`supportless.files.gltf.GltfSkin.vertices`). With ``normalise``, each
     vertex's weights are divided by their sum first (as three.js does).
     ``doc`` is the file already loaded with pygltflib, if it is.
     """
@@ -559,7 +558,7 @@ def test_seam_split_vertices_are_welded_into_a_closed_body(tmp_path, cache):
     skin = read_gltf_skin(path)
     assert len(skin.vertices) == 3 * 44  # as stored: three per face
     rig = load(path, cache)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     assert len(rig.vertices) == 24  # the column's unique positions
     assert len(np.unique(np.round(rig.vertices, 6), axis=0)) == 24
     assert len(rig.faces) == 44
@@ -572,7 +571,7 @@ def test_every_primitive_and_mesh_node_is_in_the_body(tmp_path, cache):
     skin = read_gltf_skin(path)
     assert skin.part_names == ["Body#0", "Body#1", "mesh1"]
     rig = load(path, cache)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     # the right arm (primitive 2 of the body mesh) reaches x = 30, the left arm (a second node) x = -30
     np.testing.assert_allclose(body_extent(rig), [[-30, 0, -10], [30, 60, 10]], atol=1e-5)
     column_v, arm_outside = 20 * 60 * 20, 20 * 10 * 10
@@ -598,7 +597,7 @@ def test_a_body_split_into_open_primitives_along_a_seam_is_one_closed_body(tmp_p
         halves.append(Prim(V[used], remap[F[mask]], J[used], W[used]))
     asset.meshes[0] = halves
     rig = load(write_gltf(asset, tmp_path / "halves.glb"), cache)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     assert len(rig.vertices) == 24  # the two caps at the seam cancel in the union
     assert signed_volume(rig.vertices, rig.faces) == pytest.approx(20 * 60 * 20, rel=1e-5)
     assert any("closed 2 holes in 2 open shells" in x for x in rig.info["gltf"]["log"])
@@ -624,7 +623,7 @@ def test_a_rigid_part_under_a_joint_is_weighted_to_it_and_follows_it(tmp_path, c
     np.testing.assert_allclose(skin.vertices[hat, 1].min(), 0.055, atol=1e-7)
     np.testing.assert_allclose(skin.vertices[hat, 1].max(), 0.07, atol=1e-7)
     rig = load(path, cache)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     top = rig.vertices[:, 1] > HEIGHT_MM + 1e-6
     assert top.sum() >= 4
     np.testing.assert_allclose(rig.weights[top], np.tile([0, 0, 1], (top.sum(), 1)), atol=1e-9)
@@ -682,7 +681,7 @@ def test_helper_joints_and_unweighted_roots_are_pruned(tmp_path, cache):
 
 def test_a_weighted_joint_outside_the_skin_is_only_a_pivot(tmp_path, cache):
     rig = load(write_gltf(character(root_below=True), tmp_path / "below.glb"), cache)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     np.testing.assert_allclose(body_extent(rig), column_extent(), atol=1e-5)
     # J0 stays a third of the height below the floor: not pulled inside as a TGF joint would be
     np.testing.assert_allclose(rig.joints[rig.bones[0]], [[0, -20, 0], [0, 20, 0]], atol=1e-5)
@@ -723,7 +722,7 @@ def test_a_stored_pose_unlike_the_bind_pose_is_the_rest_pose_a_viewer_shows(tmp_
     ra = load(animated, cache)
     np.testing.assert_allclose(np.ptp(ra.vertices, 0).max(), np.ptp(b.vertices, 0).max() * 1000,
                                rtol=2.0 / WINDING_CELLS)
-    check_closed_surface(ra.vertices, ra.faces)
+    check_closed_surface(ra.faces)
     assert intersecting_face_pairs(ra.vertices, ra.faces) == 0
 
 
@@ -930,7 +929,7 @@ def test_cli_optimize_and_apply_a_glb(tmp_path):
     angles = sl.read_pose(tmp_path / "p.json", rig.bones)
     posed = skinned_positions(tmp_path / "out.glb") * rig.info["gltf"]["scale"]
     assert posed[:, 1].min() == pytest.approx(0.0, abs=1e-4)
-    standing = sl.geometry.place_on_plate(rig.pose(angles), rig.up)
+    standing = sl.base.geometry.place_on_plate(rig.pose(angles), rig.up)
     bind = read_gltf_skin(tiny).vertices * rig.info["gltf"]["scale"]
     dist, idx = cKDTree(rig.vertices).query(bind)
     on = dist < 1e-6 * HEIGHT_MM
@@ -953,7 +952,7 @@ def test_shared_asset(shared_file, tmp_path, name, bones, pruned, on_body):
     path = shared_file(f"gltf/{name}")
     rig = load_rig(path, height_mm=60, cache_dir=tmp_path / "cache")
     assert np.ptp(rig.vertices[:, 1]) == pytest.approx(60.0, rel=1e-9)
-    check_closed_surface(rig.vertices, rig.faces)
+    check_closed_surface(rig.faces)
     assert signed_volume(rig.vertices, rig.faces) > 0
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -1021,8 +1020,8 @@ def test_a_gltf_with_an_external_bin_is_posed_into_a_glb(tmp_path, cache):
 
 def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, monkeypatch):
     """Over the proxy threshold a glTF rig gets a simplified volume and search surface; answers stay full size."""
-    from supportless import rig as rig_mod
-    from supportless.search import optimize
+    from supportless.rig import rig as rig_mod
+    from supportless.search.optimizer import optimize
 
     path = write_gltf(character(), tmp_path / "column.glb")
     plain = load(path, cache)
@@ -1030,7 +1029,7 @@ def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, mon
     V2, F2 = igl.upsample(V, F, 2)  # a denser print body of the same column
     monkeypatch.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
     monkeypatch.setattr(rig_mod, "PROXY_TARGET", len(F2) // 4)
-    from supportless.printbody import transfer_values
+    from supportless.files.printbody import transfer_values
 
     dense = rig_mod.prepare_rig(V2, F2, plain.joints, plain.bones, "y",
                                 surface_weights=transfer_values(V2, V, F, plain.weights))

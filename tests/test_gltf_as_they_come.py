@@ -7,10 +7,9 @@ import meshoptimizer
 import numpy as np
 import pygltflib
 import pytest
-
 from test_gltf import Prim, _blob, _values, assert_input_error, box_prim, character, load, one_hot, write_gltf
-from supportless.gltf import read_gltf_skin, write_posed_gltf
 
+from supportless.files.gltf import read_gltf_skin, write_posed_gltf
 
 
 @pytest.fixture

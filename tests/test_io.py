@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless import io
-from supportless.geometry import parse_up, signed_volume
+from supportless.files import meshes as io
+from supportless.base.geometry import parse_up, signed_volume
 
 FORMATS = ["stl", "obj", "ply", "off", "3mf", "glb"]
 
@@ -63,7 +63,7 @@ def test_mesh_round_trip(tmp_path, branch_mesh, ext):
         np.testing.assert_allclose(signed_volume(V2, F2), signed_volume(V, F), rtol=1e-8)
     else:
         np.testing.assert_array_equal(np.sort(V2, axis=0), np.sort(V, axis=0))
-    io.check_closed_surface(V2, F2, path)
+    io.check_closed_surface(F2, path)
     # nothing but the file itself is left in the folder
     assert [p.name for p in tmp_path.iterdir()] == [path.name]
 
@@ -81,7 +81,7 @@ def test_stl_soup_is_welded(tmp_path, box_surface):
     sl.write_mesh(tmp_path / "box.stl", V, F)
     V2, F2 = sl.read_mesh(tmp_path / "box.stl")
     assert V2.shape == (8, 3) and F2.shape == (12, 3)
-    io.check_closed_surface(V2, F2)
+    io.check_closed_surface(F2)
     assert signed_volume(V2, F2) == 6.0  # integer corners: exact
 
 
@@ -121,15 +121,15 @@ def test_unknown_and_missing_mesh_files(tmp_path):
 
 def test_check_closed_surface_messages(box_surface):
     V, F = box_surface()
-    io.check_closed_surface(V, F)
+    io.check_closed_surface(F)
     with pytest.raises(sl.InputError, match="box.obj: surface is not closed: 3 boundary edges"):
-        io.check_closed_surface(V, F[1:], "box.obj")
+        io.check_closed_surface(F[1:], "box.obj")
     with pytest.raises(sl.InputError, match="not manifold"):
-        io.check_closed_surface(V, np.vstack([F, F[:1]]))
+        io.check_closed_surface(np.vstack([F, F[:1]]))
     Fw = F.copy()
     Fw[0] = Fw[0, ::-1]
     with pytest.raises(sl.InputError, match="consistently oriented"):
-        io.check_closed_surface(V, Fw)
+        io.check_closed_surface(Fw)
 
 
 # ---------------------------------------------------------------- atomic writes
@@ -269,7 +269,7 @@ def test_tgf_bones_in_any_order(tmp_path):
     (tmp_path / "x.tgf").write_text("1 0 0 0\n2 0 1 0\n3 0 2 0\n4 1 2 0\n#\n3 4\n2 3\n1 2\n#\n")
     J, B = sl.read_tgf(tmp_path / "x.tgf")
     assert B.tolist() == [[2, 3], [1, 2], [0, 1]]
-    assert sl.kinematics.bone_parents(B).tolist() == [1, 2, -1]
+    assert sl.base.kinematics.bone_parents(B).tolist() == [1, 2, -1]
 
 
 @pytest.mark.parametrize("name, joints, bones", [("bunny", 12, 11), ("bb-bunny", 13, 12), ("woody", 9, 8)])
@@ -277,7 +277,7 @@ def test_shared_tgf_files(shared_file, name, joints, bones):
     J, B = sl.read_tgf(shared_file(f"{name}.tgf"))
     assert J.shape == (joints, 3) and B.shape == (bones, 2)
     assert B.min() >= 0 and B.max() < joints
-    assert (sl.kinematics.bone_parents(B) < 0).sum() >= 1
+    assert (sl.base.kinematics.bone_parents(B) < 0).sum() >= 1
 
 
 @pytest.mark.parametrize("text, fragments", [
@@ -470,7 +470,7 @@ def test_a_pose_file_no_tool_wrote_is_one_line(tmp_path, text, fragment):
     with pytest.raises(sl.InputError, match=fragment) as info:
         sl.read_pose(path, np.array([[0, 1]]))
     assert "\n" not in str(info.value)
-    from supportless.posefile import read_pose_print_frame, read_print_rotation
+    from supportless.files.posefile import read_pose_print_frame, read_print_rotation
 
     for read in (read_pose_print_frame, read_print_rotation):  # the other readers of the same file
         try:
@@ -501,8 +501,8 @@ def test_a_killed_writes_temporary_file_is_removed_by_the_next_write_a_live_ones
     import os
     import time
 
-    from supportless.io import atomic_path
-    from supportless.scratch import STALE_SECONDS, _host, owner_tag
+    from supportless.base.scratch import STALE_SECONDS, _host, owner_tag
+    from supportless.files.meshes import atomic_path
 
     dead = tmp_path / f".pose.{_host()}-{_dead_pid()}-k3j_x9ab.json"  # a killed run's, a second old
     live = tmp_path / f".pose.{owner_tag()}-q1w2e3r4.json"  # this process's own write under way
@@ -521,7 +521,7 @@ def test_a_killed_writes_temporary_file_is_removed_by_the_next_write_a_live_ones
 
 def test_a_rig_cache_entry_left_half_written_by_a_kill_is_removed_by_the_next_write(tmp_path):
     import supportless as sl
-    from supportless.scratch import _host
+    from supportless.base.scratch import _host
 
     sl.load_rig("demo:branch", cache_dir=tmp_path)
     entry = next(tmp_path.glob("*.npz"))
@@ -536,8 +536,8 @@ def test_every_kind_of_scratch_a_killed_run_leaves_is_removed_by_the_next_run(tm
     """The scratch names the tool makes, each left by a dead process, and what removes it on the next run."""
     import tempfile
 
-    from supportless.isolated import run_isolated
-    from supportless.scratch import _host, scratch_dir
+    from supportless.base.isolated import run_isolated
+    from supportless.base.scratch import _host, scratch_dir
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # the system temporary folder, for this test
     tag = f"{_host()}-{_dead_pid()}-"
@@ -564,7 +564,7 @@ def test_every_kind_of_scratch_a_killed_run_leaves_is_removed_by_the_next_run(tm
 def test_a_collapsed_mesh_is_one_line_naming_the_file(tmp_path, squash, fragment):
     """All vertices on a point, a plane or a line: one line, not a traceback or a misleading joint message."""
     import supportless as sl
-    from supportless.errors import InputError
+    from supportless.base.errors import InputError
 
     V, F, J, B = sl.demo_figure("branch")[:4]
     sl.write_mesh(tmp_path / "m.obj", V * np.asarray(squash, float), F)
@@ -576,7 +576,7 @@ def test_a_collapsed_mesh_is_one_line_naming_the_file(tmp_path, squash, fragment
 
 
 def test_check_not_flat_accepts_a_thin_but_real_solid():
-    from supportless.io import check_not_flat
+    from supportless.files.meshes import check_not_flat
 
     V, F = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1e-3]], float), np.array([[0, 2, 1], [0, 1, 3],
                                                                                           [1, 2, 3], [0, 3, 2]])

@@ -1,4 +1,4 @@
-"""Native calls in a child process (:mod:`supportless.isolated`): a crash is an error, not the end."""
+"""Native calls in a child process (:mod:`supportless.base.isolated`): a crash is an error, not the end."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import signal
 import numpy as np
 import pytest
 
-from supportless.isolated import NativeFailure, run_isolated
+from supportless.base.isolated import NativeFailure, run_isolated
 
 
 def _double(a):

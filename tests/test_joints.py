@@ -1,12 +1,12 @@
-"""Bones from a joint hierarchy (:mod:`supportless.joints`), on hand-made hierarchies."""
+"""Bones from a joint hierarchy (:mod:`supportless.files.joints`), on hand-made hierarchies."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from supportless.errors import InputError
-from supportless.joints import LEAF_REACH, joint_order, skeleton_from_joints
+from supportless.base.errors import InputError
+from supportless.files.joints import LEAF_REACH, joint_order, skeleton_from_joints
 
 
 def hip_with_four_children():

@@ -1,4 +1,4 @@
-"""Forward kinematics, Euler angles and linear blend skinning (supportless.kinematics)."""
+"""Forward kinematics, Euler angles and linear blend skinning (supportless.base.kinematics)."""
 
 import igl
 import numpy as np
@@ -7,7 +7,7 @@ from scipy.spatial.distance import pdist
 from scipy.spatial.transform import Rotation
 
 import supportless as sl
-from supportless import kinematics as kin
+from supportless.base import kinematics as kin
 
 
 def _rx(a):
@@ -309,7 +309,7 @@ def test_sparse_skinning_equals_the_dense_product():
     """The compiled loop over a sparse LBS matrix gives ``M @ T`` (batch and single pose)."""
     from scipy.sparse import csr_matrix
 
-    from supportless.kinematics import lbs_matrix, lbs_operator, skin, stack_transforms
+    from supportless.base.kinematics import lbs_matrix, lbs_operator, skin, stack_transforms
 
     rng = np.random.default_rng(5)
     V = rng.normal(size=(50, 3))
@@ -328,7 +328,7 @@ def test_sparse_skinning_equals_the_dense_product():
 def test_sparse_skinning_of_a_planar_rig_equals_the_dense_product():
     from scipy.sparse import csr_matrix
 
-    from supportless.kinematics import lbs_matrix, skin, stack_transforms
+    from supportless.base.kinematics import lbs_matrix, skin, stack_transforms
 
     rng = np.random.default_rng(6)
     V = rng.normal(size=(30, 2))
@@ -342,7 +342,7 @@ def test_sparse_skinning_of_a_planar_rig_equals_the_dense_product():
 
 
 def test_pruned_weights_drop_the_tail_and_keep_each_row_sum():
-    from supportless.kinematics import pruned_weights
+    from supportless.base.kinematics import pruned_weights
 
     W = np.array([[0.7, 0.29995, 5e-5, 0.0], [0.25, 0.25, 0.25, 0.25], [5e-5, 5e-5, 5e-5, 5e-5]])
     P = pruned_weights(W, 1e-4)
@@ -354,8 +354,8 @@ def test_pruned_weights_drop_the_tail_and_keep_each_row_sum():
 
 def test_the_search_skinning_moves_no_vertex_further_than_its_stated_bound():
     """SEARCH_WEIGHT_FLOOR's promise (0.012 % of the height measured; asserted with room: 0.03 %), and rest stays rest."""
-    from supportless.bench import random_poses
-    from supportless.objective import Objective
+    from supportless.apps.bench import random_poses
+    from supportless.search.objective import Objective
 
     for name in ("tpose", "hand", "dragon"):
         rig = sl.load_rig(f"demo:{name}")
@@ -372,7 +372,7 @@ def test_skinning_by_bone_blocks_adds_exactly_as_a_loop_over_the_nonzeros():
     """The compiled kernel runs over (vertex, bone) blocks; its sums are the plain loop's, bit for bit."""
     from scipy.sparse import csr_matrix
 
-    from supportless.kinematics import bone_blocks, lbs_matrix, skin, stack_transforms
+    from supportless.base.kinematics import bone_blocks, lbs_matrix, skin, stack_transforms
 
     rng = np.random.default_rng(7)
     V = rng.normal(size=(40, 3))

@@ -8,7 +8,7 @@ import tempfile
 from pathlib import Path
 
 import supportless
-from supportless.numba_cache import fallback_cache_dir, writable
+from supportless.base.numba_cache import fallback_cache_dir, writable
 
 
 def test_numbas_own_places_are_kept_when_one_is_writable(tmp_path):

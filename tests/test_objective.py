@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.objective import INFEASIBLE
-from supportless.geometry import signed_volume
+from supportless.base.geometry import signed_volume
+from supportless.search.objective import INFEASIBLE
 
 
 @pytest.fixture(scope="module")
@@ -170,7 +170,7 @@ def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
 
 
 def test_bounded_measures_each_term_only_where_the_cheaper_ones_leave_a_pose_below_its_bound(rig, monkeypatch):
-    from supportless import objective as objective_mod
+    from supportless.search import objective as objective_mod
 
     obj = sl.Objective(rig)
     obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
@@ -221,7 +221,7 @@ def test_the_self_intersection_is_measured_only_below_the_intersection_bound(rig
 
 
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
-    from supportless import objective as objective_mod
+    from supportless.search import objective as objective_mod
 
     obj = sl.Objective(rig)
     A = random_angles(rig, 23, scale=0.8, seed=3)

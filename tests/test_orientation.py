@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 import supportless as sl
-from supportless.orientation import candidate_ups, rank_ups, rotation_between
+from supportless.search.orientation import candidate_ups, rank_ups, rotation_between
 
 
 def test_rotation_between_takes_a_to_b():
@@ -59,8 +59,14 @@ def test_ranking_matches_the_energy_of_the_turned_mesh(tpose_rig):
 # --------------------------------------------------------------------------- #
 from scipy.spatial.transform import Rotation  # noqa: E402
 
-from supportless.orientation import (  # noqa: E402
-    orientation_params, print_direction, rotation_axis_angle, rotations_from_params, seed_params, tangent_basis)
+from supportless.search.orientation import (  # noqa: E402
+    orientation_params,
+    print_direction,
+    rotation_axis_angle,
+    rotations_from_params,
+    seed_params,
+    tangent_basis,
+)
 
 
 @pytest.mark.parametrize("up", [[0, 1, 0], [0, 0, 1], [1, -2, 0.5]])

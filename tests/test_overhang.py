@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import trimesh
+from meshes import box, cells_mesh, t_shape, union
 
 from supportless.energies.overhang import (
     overhang_energy,
@@ -11,8 +12,6 @@ from supportless.energies.overhang import (
     risky_faces,
 )
 from supportless.energies.surface import boundary_edges
-
-from meshes import box, cells_mesh, t_shape, union
 
 UP = np.array([0.0, 0.0, 1.0])
 

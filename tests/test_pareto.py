@@ -8,9 +8,9 @@ import pytest
 from click.testing import CliRunner
 
 import supportless as sl
+from supportless.apps.pareto import SAME_DEGREES, non_dominated, pareto_front, spread, sweep_factors
 from supportless.copyleft.cgal import self_intersects
-from supportless.pareto import SAME_DEGREES, non_dominated, pareto_front, spread, sweep_factors
-from supportless.search import pose_distance_deg
+from supportless.search.optimizer import pose_distance_deg
 
 
 def test_non_dominated_on_known_points():
@@ -79,14 +79,14 @@ def test_the_front_is_spread_non_dominated_and_keeps_the_rules(tpose_front):
 
 def test_the_least_support_end_is_no_worse_than_the_single_search(tpose_front):
     rig, settings, front = tpose_front
-    from supportless.report import predicted_slicer
+    from supportless.report.report import predicted_slicer
 
     single = predicted_slicer(rig, front.default)["after_mm"]
     assert front.poses[0].support <= single + 1e-9
 
 
 def test_cli_writes_the_front_beside_the_output(tmp_path, branch_files):
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     out = tmp_path / "posed.stl"
     r = CliRunner().invoke(main, ["optimize", str(branch_files["mesh"]), "--cache-dir", str(branch_files["cache"]),
@@ -105,7 +105,7 @@ def test_cli_writes_the_front_beside_the_output(tmp_path, branch_files):
 
 
 def test_cli_refuses_pareto_with_slice_rank(tmp_path, branch_files):
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     r = CliRunner().invoke(main, ["optimize", str(branch_files["mesh"]), "--pareto", "3", "--slice-rank", "2",
                                   "-o", str(tmp_path / "o.stl")])
@@ -113,7 +113,7 @@ def test_cli_refuses_pareto_with_slice_rank(tmp_path, branch_files):
 
 
 def test_cli_front_of_a_gltf_character(tmp_path, shared_data):
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     r = CliRunner().invoke(main, ["optimize", str(shared_data / "gltf" / "Fox.glb"), "--particles", "12",
                                   "--iterations", "3", "--pareto", "2", "-q", "-o", str(tmp_path / "fox.glb"),

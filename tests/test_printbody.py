@@ -1,4 +1,4 @@
-"""The print body (supportless.printbody): analytic checks on boxes.
+"""The print body (supportless.files.printbody): analytic checks on boxes.
 
 Volumes are exact for unions of axis-aligned boxes, and a linear function of
 position carried as the per-vertex values must come out as the same linear
@@ -11,13 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
-from supportless.copyleft.cgal import intersecting_face_pairs
-from supportless.geometry import signed_volume
-from supportless.io import check_closed_surface
-from supportless.printbody import BRIDGE_GAP, ISLAND_MIN_VOLUME, SHELL_MIN_VOLUME, print_body, transfer_values
-
 from meshes import box
+
+from supportless.base.geometry import signed_volume
+from supportless.copyleft.cgal import intersecting_face_pairs
+from supportless.files.meshes import check_closed_surface
+from supportless.files.printbody import BRIDGE_GAP, ISLAND_MIN_VOLUME, SHELL_MIN_VOLUME, print_body, transfer_values
 
 #: Coefficients of the linear values: column k is ``OFFSET[k] + x · GRADIENT[:, k]``.
 GRADIENT = np.array([[1.0, -0.5], [2.0, 0.25], [-3.0, 1.5]])
@@ -49,7 +48,7 @@ def body_of(V, F, part, values=None):
     self-intersections, and that it carries the linear values at its vertices.
     """
     body = print_body(V, F, part, linear(V) if values is None else values)
-    check_closed_surface(body.vertices, body.faces)
+    check_closed_surface(body.faces)
     assert signed_volume(body.vertices, body.faces) > 0
     assert intersecting_face_pairs(body.vertices, body.faces) == 0
     if values is None:
@@ -116,7 +115,7 @@ def test_cubes_a_small_gap_apart_are_bridged_into_one_solid(gap):
     body = print_body(V, F, part, linear(V))
     assert "bridged 1 gap(s)" in line(body, "union of 2 shells")
     assert body.islands == 1, body.log
-    check_closed_surface(body.vertices, body.faces)
+    check_closed_surface(body.faces)
     # the bridge is the box between the facing sides: the hull of their corners
     assert volume(body) == pytest.approx(2.0 + gap, rel=1e-6)
     np.testing.assert_allclose(body.values, linear(body.vertices), rtol=0, atol=1e-5)
@@ -145,7 +144,7 @@ def test_a_large_separate_cube_is_kept_as_a_second_island_with_a_warning():
 
 
 def test_nothing_closable_is_an_input_error():
-    from supportless.errors import InputError
+    from supportless.base.errors import InputError
 
     V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
     with pytest.raises(InputError, match="no part of the model can be closed"):
@@ -175,12 +174,12 @@ def crossing_boxes():
 
 
 def test_the_winding_number_surface_of_crossing_shells_is_their_union_closed_and_clean():
-    from supportless.printbody import WINDING_CELLS, winding_surface
+    from supportless.files.printbody import WINDING_CELLS, winding_surface
 
     V, F = crossing_boxes()
     assert intersecting_face_pairs(V, F) > 0
     Vs, Fs = winding_surface(V, F, WINDING_CELLS)
-    check_closed_surface(Vs, Fs)
+    check_closed_surface(Fs)
     assert intersecting_face_pairs(Vs, Fs) == 0
     # placed by distance, not by cells: the flat faces stay where they were (to float noise), the volume too
     np.testing.assert_allclose(Vs.min(0), V.min(0), atol=1e-3 * 2.5)
@@ -191,14 +190,14 @@ def test_the_winding_number_surface_of_crossing_shells_is_their_union_closed_and
 
 
 def test_crossing_triangles_left_by_the_union_are_resolved_with_the_values_carried():
-    from supportless.printbody import SIMPLIFY_TOLERANCE, _resolve_crossings
+    from supportless.files.printbody import SIMPLIFY_TOLERANCE, _resolve_crossings
 
     V, F = crossing_boxes()
     values = np.column_stack([V[:, 0] / 2, 1 - V[:, 0] / 2])  # linear in x: carried exactly by closest point
     log = []
     Vx, Fx, Wx = _resolve_crossings(V, F, values, SIMPLIFY_TOLERANCE * 2.5, log)
     assert intersecting_face_pairs(Vx, Fx) == 0
-    check_closed_surface(Vx, Fx)
+    check_closed_surface(Fx)
     np.testing.assert_allclose(signed_volume(Vx, Fx), 2.5, rtol=0.01)
     np.testing.assert_allclose(Wx[:, 0], np.clip(Vx[:, 0] / 2, 0, 1), atol=0.01)
     assert len(log) == 1 and "crossing triangles" in log[0]
@@ -212,7 +211,7 @@ def test_a_shell_closing_cannot_make_manifold_is_kept_through_its_winding_number
     F = np.vstack([F, [[a, b, d], [a, d, c]]])
     part = np.concatenate([part, [0, 0]])
     body = print_body(V, F, part, linear(V))
-    check_closed_surface(body.vertices, body.faces)
+    check_closed_surface(body.faces)
     assert intersecting_face_pairs(body.vertices, body.faces) == 0
     union = 2.0 + 1.5 * 0.6 * 0.6 - 0.5 * 0.6 * 0.6  # the boxes overlap over 0.5 x 0.6 x 0.6
     np.testing.assert_allclose(signed_volume(body.vertices, body.faces), union, rtol=0.03)

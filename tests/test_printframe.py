@@ -1,16 +1,15 @@
 """Files that print as written: +Z up, millimetres, on the plate; a 3MF a strict reader accepts; one support figure."""
 
 import json
-import os
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 import supportless as sl
-from supportless.cli import main
-from supportless.geometry import signed_volume
-from supportless.printframe import DEFAULT_HEIGHT_MM, print_frame, rotation_to_z
+from supportless.apps.cli import main
+from supportless.base.geometry import signed_volume
+from supportless.files.printframe import DEFAULT_HEIGHT_MM, print_frame, rotation_to_z
 
 
 def run(*args):
@@ -206,7 +205,7 @@ def test_the_summary_leads_with_the_reports_support_line(tpose_rig, tmp_path):
     assert res.exit_code == 0, (res.output, res.exception)
     report = json.loads((tmp_path / "r.json").read_text())
     line = report["support"]["line"]
-    first = next(t for t in res.stdout.splitlines() if t.startswith("support "))
+    assert any(t.startswith("support ") for t in res.stdout.splitlines())
     assert " ".join(res.stdout.split()).startswith(" ".join(line.split()))
     assert " g (" in line and "estimate" in line
     assert "e+0" not in res.stdout  # figures in human units
@@ -229,7 +228,7 @@ def test_the_progress_total_never_changes(tpose_rig):
 
 
 def test_slice_check_measures_the_written_file_itself(prusa_slicer, tiny_files, tmp_path):
-    from supportless.slicer import slice_support
+    from supportless.slicing.prusaslicer import slice_support
 
     folder, files = tiny_files
     out = tmp_path / "posed.stl"

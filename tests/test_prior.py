@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import supportless as sl
-from supportless.prior import PosePrior, joint_angles
+from supportless.search.prior import PosePrior, joint_angles
 
 
 def test_joint_angle_is_the_geodesic_angle_of_the_rotation():

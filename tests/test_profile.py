@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from supportless.errors import InputError
-from supportless.profile import PRUSA_DEFAULTS, default_profile, overhang_threshold, read_printer_profile
+from supportless.base.errors import InputError
+from supportless.files.printer import PRUSA_DEFAULTS, default_profile, overhang_threshold, read_printer_profile
 
 
 def _ini(tmp_path, text, name="printer.ini"):
@@ -76,8 +76,8 @@ def test_cli_search_threshold_follows_the_profile(tmp_path):
     """--printer-profile sets the report's threshold and the search's (threshold + margin)."""
     from click.testing import CliRunner
 
-    from supportless.cli import main
-    from supportless.settings import SearchSettings
+    from supportless.apps.cli import main
+    from supportless.search.settings import SearchSettings
 
     margin = SearchSettings().overhang_margin
     for threshold in (30, 60):
@@ -108,7 +108,7 @@ def test_slicer_follows_the_profiles_threshold(prusa_slicer, tmp_path):
     """An upside-down cone on a foot (walls 45 degrees from the plate) needs support at a 60-degree threshold, not at 30."""
     import trimesh
 
-    from supportless.slicer import slice_check
+    from supportless.slicing.prusaslicer import slice_check
 
     cone = trimesh.creation.cone(radius=10.0, height=10.0, sections=48)  # walls at 45 degrees
     cone.apply_transform(trimesh.transformations.rotation_matrix(np.pi, [1, 0, 0]))  # apex down

@@ -8,10 +8,10 @@ from click.testing import CliRunner
 from slicers import fake_exe, stand_in_slicer
 
 import supportless as sl
-from supportless.choice import KINDS, print_distance_deg
-from supportless.cli import main
-from supportless.ranking import SLICE_RANK, SLICER_NOISE, distinct_poses, pick_sliced, slice_choice, to_slice
-from supportless.search import DISTINCT_DEGREES
+from supportless.apps.cli import main
+from supportless.search.choice import KINDS, print_distance_deg
+from supportless.search.optimizer import DISTINCT_DEGREES
+from supportless.slicing.ranking import SLICE_RANK, SLICER_NOISE, distinct_poses, pick_sliced, slice_choice, to_slice
 
 
 class _FakeSlices:
@@ -121,7 +121,7 @@ def test_a_keep_search_is_ranked_among_its_own_distinct_poses(branch_rig):
 def test_slice_choice_with_the_real_slicer_keeps_what_it_measures_cheapest(branch_rig, found, prusa_slicer):
     """Integration: PrusaSlicer slices the answers; the chosen one has the least support it measured (or the
     model's choice within the noise), and slicing it again gives the same figure."""
-    from supportless.slicer import scale_for_height, slice_support
+    from supportless.slicing.prusaslicer import scale_for_height, slice_support
 
     chosen = slice_choice(branch_rig, found, 3, window=1e9)
     sliced = [c.sliced_mm for c in chosen.choice.candidates if c.sliced_mm is not None]

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 import trimesh
+from meshes import box, cells_mesh
 
 from supportless.energies import _grid_fast, _grid_numpy, _grid_reference
 from supportless.energies._grid_common import (
@@ -16,8 +17,6 @@ from supportless.energies._grid_common import (
 )
 from supportless.energies.raygrid import ray_grid
 from supportless.energies.surface import orientation_sign, prepare, to_frame
-
-from meshes import box, cells_mesh
 
 
 def cat(*meshes):

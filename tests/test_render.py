@@ -8,8 +8,7 @@ import pytest
 from matplotlib.image import imread
 
 import supportless as sl
-from supportless.render import (plot_convergence, render_before_after,
-                                render_mesh, view_bounds)
+from supportless.report.render import plot_convergence, render_before_after, render_mesh, view_bounds
 from supportless.shapes import demo_figure
 
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless import report as report_mod
+from supportless.report import report as report_mod
 from supportless.copyleft.cgal import intersecting_face_pairs
-from supportless.report import build_report, pose_measures, reduction, write_pictures
-from supportless.settings import SearchSettings
+from supportless.report.report import build_report, pose_measures, reduction, write_pictures
+from supportless.search.settings import SearchSettings
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +97,7 @@ def test_pictures_colour_faces_past_the_printers_threshold(branch_rig, searched,
     np.testing.assert_array_equal(seen["after_risky"], sl.risky_faces(searched.print_vertices, branch_rig.faces,
                                                                       branch_rig.up, 40.0))
     assert "as printed" in seen["titles"][1]
-    rest = sl.geometry.place_on_plate(branch_rig.vertices, branch_rig.up)
+    rest = sl.base.geometry.place_on_plate(branch_rig.vertices, branch_rig.up)
     expected = sl.risky_faces(rest, branch_rig.faces, branch_rig.up, 40.0)
     np.testing.assert_array_equal(first["before_risky"], expected)
     assert "> 40 deg" in first["suptitle"]

@@ -1,4 +1,4 @@
-"""The last gate (:func:`supportless.result.as_written`): what goes to the file never intersects itself more than rest."""
+"""The last gate (:func:`supportless.search.result.as_written`): what goes to the file never intersects itself more than rest."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 
 import supportless as sl
+from supportless.base.geometry import place_on_plate, print_pose
 from supportless.copyleft.cgal import intersecting_face_pairs, self_intersects
-from supportless.geometry import place_on_plate, print_pose
-from supportless.result import as_written, measured_at
+from supportless.search.result import as_written, measured_at
 
 
 def intersecting_pose(rig, rng):

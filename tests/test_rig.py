@@ -7,13 +7,12 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless import kinematics as kin
-from supportless import rig as rig_mod
-from supportless import result as result_mod
-from supportless import search as search_mod
-from supportless.errors import InputError
-from supportless.io import write_dmat, write_tet_mesh
-from supportless.geometry import signed_volume
+from supportless.base import kinematics as kin
+from supportless.rig import rig as rig_mod
+from supportless.search import optimizer as search_mod
+from supportless.base.errors import InputError
+from supportless.base.geometry import signed_volume
+from supportless.files.meshes import write_dmat, write_tet_mesh
 
 
 @pytest.fixture(scope="module")
@@ -180,7 +179,7 @@ def test_inward_surface_is_flipped(branch_files, branch_rig):
 
 def test_second_load_comes_from_the_cache(tmp_path, monkeypatch):
     first = sl.load_rig("demo:branch", up="y", cache_dir=tmp_path)
-    import supportless.rig as rig_module
+    import supportless.rig.rig as rig_module
 
     def no_preparation(*args, **kwargs):  # the second load must not prepare: it reads the entry
         raise AssertionError("the rig was prepared again")
@@ -427,7 +426,7 @@ def test_a_dense_surface_is_meshed_and_weighted_through_its_simplified_proxy(den
     coarse = rig.coarse_rig()
     assert len(coarse.faces) <= target
     # the proxy is a closed surface of the same solid, its rows the first of the volume mesh
-    sl.io.check_closed_surface(coarse.vertices, coarse.faces)
+    sl.files.meshes.check_closed_surface(coarse.faces)
     assert abs(signed_volume(coarse.vertices, coarse.faces) / signed_volume(rig.vertices, rig.faces) - 1) < 0.05
     np.testing.assert_array_equal(coarse.tet_vertices[: len(coarse.vertices)], coarse.vertices)
     # full-resolution weights: a partition of unity taken from the proxy's surface
@@ -444,7 +443,7 @@ def test_a_dense_surface_is_meshed_and_weighted_through_its_simplified_proxy(den
 def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
     rig, _ = dense_branch
     file = tmp_path / "rig.npz"
-    from supportless.rigcache import read_entry, write_entry
+    from supportless.rig.cache import read_entry, write_entry
 
     write_entry(file, rig)
     back = rig_mod.Rig(**read_entry(file), name="dense")
@@ -460,7 +459,7 @@ def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branc
     objective = result.objective
     assert objective.rig is rig
     np.testing.assert_allclose(result.value, float(objective(result.angles)), rtol=1e-12)
-    np.testing.assert_allclose(result.vertices, sl.geometry.place_on_plate(rig.pose(result.angles), rig.up))
+    np.testing.assert_allclose(result.vertices, sl.base.geometry.place_on_plate(rig.pose(result.angles), rig.up))
 
 
 #: What the proxy's terms may differ from the full surface's, as benchmarks/RESULTS.md states it (measured on
@@ -489,24 +488,24 @@ def test_the_proxy_and_the_full_surface_agree_within_the_stated_bound(dense_bran
 
 def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_clear_one(dense_branch, monkeypatch):
     rig, _ = dense_branch
-    real = result_mod.self_intersects
+    real = sl.Rig.self_intersects
     seen = []
 
     def full_surface(touching):  # the exact check: on the full surface, True for the first ``touching`` calls
-        def check(V, F):
-            if len(F) != len(rig.faces):
-                return real(V, F)
-            seen.append(V)
+        def check(self, angles):
+            if self is not rig:
+                return real(self, angles)
+            seen.append(self.pose(angles))
             return len(seen) <= touching
         return check
 
-    monkeypatch.setattr(result_mod, "self_intersects", full_surface(0))  # the full-surface check lives in result
+    monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(0))  # the full-surface check of the proxy's answers
     monkeypatch.setattr(search_mod, "as_written", lambda rig, found: found)  # the real last gate would see the fake
     clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)  # the choice, before any polish
     assert clear.stats["full_exact_calls"] == 1
     np.testing.assert_allclose(seen[0], rig.pose(clear.angles))  # the proxy's answer, checked on the full surface
     seen.clear()
-    monkeypatch.setattr(result_mod, "self_intersects", full_surface(1))
+    monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(1))
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
     assert result.stats["full_exact_calls"] == 2
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
@@ -533,7 +532,7 @@ def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monke
     assert result.stats["full_polish_evaluations"] == 1 + 3 * search_mod.POLISH_SAMPLES
     assert result.value <= chosen.value  # it starts at the chosen pose and keeps it unless it finds better
     np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)  # full surface
-    assert result.objective.rig is rig and not search_mod.self_intersects(rig.pose(result.angles), rig.faces)
+    assert result.objective.rig is rig and not rig.self_intersects(result.angles)
     # the progress counts the proxy's 4 iterations and the polish's 3 as one search of 7
     assert seen == [(it, 7) for it in range(1, 8)]
     assert len(result.history) == len(chosen.history) + 3

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.search import POLISH_SAMPLES, particle_swarm
-from supportless.settings import PSO_PRESETS, SearchSettings, resolve_fixed_bones
+from supportless.search.optimizer import POLISH_SAMPLES, particle_swarm
+from supportless.search.settings import PSO_PRESETS, SearchSettings, resolve_fixed_bones
 
 
 def sphere(X):
@@ -225,9 +225,9 @@ def _printed_support(result, rig):
 
 def test_orient_keep_is_the_pose_only_search(branch_rig):
     """``orient="keep"`` adds nothing: the swarm over the pose variables alone, the same result bit for bit."""
-    from supportless.search import particle_swarm
-    from supportless.settings import PSO_PRESETS
-    from supportless.symmetry import PoseLayout
+    from supportless.search.layout import PoseLayout
+    from supportless.search.optimizer import particle_swarm
+    from supportless.search.settings import PSO_PRESETS
 
     rig, settings = branch_rig, SearchSettings(particles=16, iterations=8, seed=5, orient="keep",
                                                exact_intersections=False)
@@ -312,7 +312,7 @@ def test_a_repeated_search_is_never_worse_than_its_start_pose_and_turn(branch_ri
 # CMA-ES (optimizer="cma")
 # --------------------------------------------------------------------------- #
 def test_evolution_strategy_finds_minimum_of_a_quadratic_with_batched_calls():
-    from supportless.search import CMA_SHARE, evolution_strategy
+    from supportless.search.optimizer import CMA_SHARE, evolution_strategy
 
     calls = []
 
@@ -330,7 +330,7 @@ def test_evolution_strategy_finds_minimum_of_a_quadratic_with_batched_calls():
 
 
 def test_evolution_strategy_respects_bounds_feasibility_and_is_reproducible():
-    from supportless.search import evolution_strategy
+    from supportless.search.optimizer import evolution_strategy
 
     seen = []
 
@@ -352,7 +352,7 @@ def test_evolution_strategy_respects_bounds_feasibility_and_is_reproducible():
 
 
 def test_evolution_strategy_never_worse_than_its_initial_positions_and_stops_on_callback():
-    from supportless.search import evolution_strategy
+    from supportless.search.optimizer import evolution_strategy
 
     start = np.array([[0.3, 0.3], [0.9, -0.9]])
     res = evolution_strategy(sphere, -np.ones(2), np.ones(2), particles=40, iterations=5, initial=start,
@@ -382,7 +382,7 @@ def test_optimize_with_cma_is_never_worse_than_rest_and_has_no_intersection(bran
 
 
 def test_pose_distance_is_the_largest_bone_or_print_rotation():
-    from supportless.search import pose_distance_deg
+    from supportless.search.optimizer import pose_distance_deg
 
     a = np.zeros((3, 3))
     b = a.copy()
@@ -405,7 +405,7 @@ def _candidates(angles_deg, values):
 
 
 def test_distinct_candidates_skip_near_copies_and_poor_poses():
-    from supportless.search import distinct_candidates, pose_distance_deg
+    from supportless.search.optimizer import distinct_candidates, pose_distance_deg
 
     poses = np.zeros((6, 2, 3))
     poses[1, 0, 0] = 3.0    # a near-copy of the best
@@ -434,7 +434,7 @@ def test_distinct_candidates_skip_near_copies_and_poor_poses():
 
 
 def test_search_result_carries_its_candidates_best_first(branch_rig):
-    from supportless.search import distinct_candidates
+    from supportless.search.optimizer import distinct_candidates
 
     res = sl.optimize(branch_rig, particles=24, iterations=10, seed=0, orient="keep")
     c = res.candidates
@@ -451,23 +451,21 @@ def test_search_result_carries_its_candidates_best_first(branch_rig):
 
 def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monkeypatch):
     """An embedded closed surface is nowhere two layers deep: such candidates are rejected without CGAL."""
-    from supportless import search as search_mod
+    from supportless.search import optimizer as search_mod
 
     rig = sl.load_rig("demo:tree")
     asked = []
-    real = search_mod.self_intersects
 
-    def counted(V, F):
-        answer = real(V, F)
+    def counted(angles):  # the exact check, counted
+        answer = rig.self_intersects(angles)
         asked.append(answer)
         return answer
 
-    monkeypatch.setattr(search_mod, "self_intersects", counted)
-    fast = sl.optimize(rig, particles=30, iterations=10, orient="keep")
+    fast = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted)
     fast_asked = list(asked)
     asked.clear()
     monkeypatch.setattr(search_mod, "OVERLAP_CERTAIN", np.inf)  # CGAL asked about every candidate
-    slow = sl.optimize(rig, particles=30, iterations=10, orient="keep")
+    slow = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted)
     assert fast.stats["overlap_rejections"] >= 3 and slow.stats["overlap_rejections"] == 0
     assert len(asked) == len(fast_asked) + fast.stats["overlap_rejections"]
     assert sum(asked) == sum(fast_asked) + fast.stats["overlap_rejections"]  # CGAL agreed: each one intersects
@@ -478,7 +476,7 @@ def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monk
 def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
     """Skipping the intersection term of poses that cannot beat their bound, and every term of poses past a joint
     limit, leaves the swarm's decisions as they are with every pose measured in full."""
-    from supportless.objective import Objective
+    from supportless.search.objective import Objective
 
     rig = sl.load_rig("demo:tree")
     settings = SearchSettings(particles=30, iterations=12, joint_limit=30.0)
@@ -510,12 +508,12 @@ def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
     np.testing.assert_array_equal(polished.history[:len(plain.history)], plain.history)  # the same swarm first
     assert len(polished.history) == len(plain.history) + 5 and np.all(np.diff(polished.history) <= 0)
     assert not sl.copyleft.cgal.self_intersects(branch_rig.pose(polished.angles), branch_rig.faces)
-    with pytest.raises(sl.errors.InputError):
+    with pytest.raises(sl.InputError):
         SearchSettings(polish=-1)
 
 
 def test_only_poses_that_could_become_the_swarms_best_are_measured_for_self_intersection(branch_rig, monkeypatch):
-    from supportless.objective import Objective
+    from supportless.search.objective import Objective
 
     measured = []
     real = Objective._intersection

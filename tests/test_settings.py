@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.objective import INFEASIBLE, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR
-from supportless.settings import SearchSettings, angle_layout, resolve_fixed_bones
+from supportless.search.objective import INFEASIBLE, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR
+from supportless.search.settings import SearchSettings, angle_layout, resolve_fixed_bones
 
 
 def test_defaults_and_frozen():

@@ -10,10 +10,10 @@ from scipy.sparse.csgraph import connected_components
 
 import supportless as sl
 from supportless import shapes
+from supportless.base.geometry import signed_volume
+from supportless.base.kinematics import bone_parents, topological_order
 from supportless.copyleft.cgal import intersecting_face_pairs
-from supportless.geometry import signed_volume
-from supportless.io import edge_counts
-from supportless.kinematics import bone_parents, topological_order
+from supportless.files.meshes import edge_counts
 from supportless.shapes import DEMO_FIGURES, demo_figure
 
 UP3 = np.array([0.0, 1.0, 0.0])
@@ -348,7 +348,7 @@ def test_woody2d_vertices_on_joints_and_bones():
 
 def test_the_benchmark_character_is_a_big_clean_rig():
     """``supportless bench --targets``' character: a game-sized rig (60+ bones) on a surface dense enough for the proxy."""
-    from supportless.rig import PROXY_FACES
+    from supportless.rig.rig import PROXY_FACES
     from supportless.shapes.character import character
 
     V, F, J, B = character()

@@ -1,4 +1,4 @@
-"""Tests for supportless.slicer (PrusaSlicer-based support measurement)."""
+"""Tests for supportless.slicing.prusaslicer (PrusaSlicer-based support measurement)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from slicers import fake_exe, stand_in_slicer
 
-from supportless import slicer as sl
-from supportless.errors import InputError, SupportlessError
-from supportless.io import read_mesh
-from supportless.report import reduction
-from supportless.slicer import (
+from supportless.slicing import prusaslicer as sl
+from supportless.base.errors import InputError, SupportlessError
+from supportless.files.meshes import read_mesh
+from supportless.report.report import reduction
+from supportless.slicing.prusaslicer import (
     SliceReport,
     SlicerError,
     SlicerNotFound,
@@ -369,7 +369,7 @@ def _demo_meshes(tmp_path):
 def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     from click.testing import CliRunner
 
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     rest, posed = _demo_meshes(tmp_path)
     out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--up", "y", "--posed-as", "original",
@@ -389,7 +389,7 @@ def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
 def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monkeypatch):
     from click.testing import CliRunner
 
-    from supportless.cli import main
+    from supportless.apps.cli import main
 
     rest, posed = _demo_meshes(tmp_path)
     monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(tmp_path / "no-such-slicer"))
@@ -400,7 +400,7 @@ def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monke
 
 
 def test_parse_print_time():
-    from supportless.slicer import parse_print_time
+    from supportless.slicing.prusaslicer import parse_print_time
 
     assert parse_print_time("; estimated printing time (normal mode) = 1h 1m 31s\n") == 3691.0
     assert parse_print_time("x\n; estimated printing time (normal mode) = 2d 0h 0m 5s\n") == 2 * 86400 + 5.0
@@ -419,7 +419,7 @@ STAND_IN_WITH_TIME = STAND_IN_SLICER.replace(
 
 
 def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path):
-    from supportless.profile import read_printer_profile
+    from supportless.files.printer import read_printer_profile
 
     exe = fake_exe(tmp_path, "stand-in-slicer", STAND_IN_WITH_TIME)
     ini = tmp_path / "petg.ini"
@@ -444,7 +444,7 @@ def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path
 
 def test_feature_filament_counts_extrusion_per_feature_absolute_and_relative():
     """Hand-counted G-code: retractions and their undoing, travel and resets are not filament laid down."""
-    from supportless.gcode import feature_filament
+    from supportless.slicing.gcode import feature_filament
 
     absolute = ("M82\nG92 E0\nG1 X0 Y0 E2.0\n;TYPE:Perimeter\nG1 X1 Y0 E5.0\nG1 E4.2 ; retract\n"
                 "G1 X5 Y5 F9000\nG1 E5.0 ; unretract\n;TYPE:Support material\nG1 X2 Y2 E7.5\n"
@@ -460,7 +460,7 @@ def test_feature_filament_counts_extrusion_per_feature_absolute_and_relative():
 
 def test_support_by_feature_agrees_with_the_difference_of_two_slices(prusa_slicer):
     """PrusaSlicer: one slice read by feature gives the support of with-minus-without to the skirt's few mm."""
-    from supportless.slicer import scale_for_height, slice_support
+    from supportless.slicing.prusaslicer import scale_for_height, slice_support
 
     V, F = _gamma_mesh()  # the arm out: it needs support
     up = (0.0, 1.0, 0.0)

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from supportless.energies.slicer_model import (COEFFICIENTS, DELTA, INTERFACE_MM, predicted_support_mm,
-                                               support_features)
+from supportless.energies.slicer_model import COEFFICIENTS, DELTA, INTERFACE_MM, predicted_support_mm, support_features
 
 
 def _shelf(height, width=10.0):

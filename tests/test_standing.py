@@ -2,14 +2,18 @@
 
 import numpy as np
 import pytest
+from meshes import box
 
 import supportless as sl
-from supportless.energies.balance import (centre_of_mass, centre_of_mass_operator, new_contact_depth,
-                                          stability_margin, support_polygon)
-from supportless.objective import INFEASIBLE
-from supportless.standing import Standing
-
-from meshes import box
+from supportless.rig.balance import (
+    centre_of_mass,
+    centre_of_mass_operator,
+    new_contact_depth,
+    stability_margin,
+    support_polygon,
+)
+from supportless.search.objective import INFEASIBLE
+from supportless.search.standing import Standing
 
 
 def test_support_polygon_and_margin_of_a_square():
@@ -29,7 +33,7 @@ def test_support_polygon_and_margin_of_a_square():
 
 def test_centre_of_mass_of_a_rigidly_moved_box():
     """A box's tets skinned to one bone: the centre of mass is the box centre, moved with the bone."""
-    from supportless.tetmesh import tetrahedralize_with_skeleton
+    from supportless.rig.tetmesh import tetrahedralize_with_skeleton
 
     V, F = box((0, 0, 0), (2, 4, 6))
     TV, TT = tetrahedralize_with_skeleton(V, F, np.array([[1.0, 2.0, 1.0], [1.0, 2.0, 5.0]]), np.array([[0, 1]]))
@@ -101,7 +105,7 @@ def test_a_pose_never_stands_with_a_negative_margin_even_when_rest_falls_over(tp
     upright, bent = (tipped.measures(transforms[k], rig.pose(A[k])) for k in range(2))
     assert upright["stands"] and upright["stability_margin"] > 0
     assert bent["stability_margin"] < 0 and bent["as_steady_as_rest"] and not bent["stands"]
-    from supportless.cli import _standing_word
+    from supportless.apps.cli import _standing_word
 
     falls = {"stands": False, "stability_margin": -0.05, "as_steady_as_rest": True}
     assert "nor does the rest pose" in _standing_word({"stands": False}, falls)

@@ -3,12 +3,11 @@
 import numpy as np
 import pytest
 import trimesh
+from meshes import box_mesh as box
+from meshes import cells_mesh, t_shape, union
 
 from supportless.energies.overhang import overhang_energy
 from supportless.energies.support import support_volume
-
-from meshes import box_mesh as box
-from meshes import cells_mesh, t_shape, union
 
 UP = np.array([0.0, 0.0, 1.0])
 

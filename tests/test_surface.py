@@ -2,7 +2,9 @@
 
 import numpy as np
 import pytest
+from meshes import box, cells_mesh
 
+from supportless.base.errors import InputError
 from supportless.energies.intersection import self_intersection_volume
 from supportless.energies.overhang import overhang_energy, projected_risky_area, risky_area, risky_faces
 from supportless.energies.support import support_volume
@@ -16,9 +18,6 @@ from supportless.energies.surface import (
     signed_volume3,
     to_frame,
 )
-from supportless.errors import InputError
-
-from meshes import box, cells_mesh
 
 ENERGIES = [overhang_energy, risky_faces, risky_area, projected_risky_area, self_intersection_volume,
             support_volume]

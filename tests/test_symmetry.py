@@ -5,9 +5,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 import supportless as sl
-from supportless.errors import InputError
-from supportless.kinematics import euler_to_matrix
-from supportless.symmetry import PoseLayout, find_mirror, require_mirror
+from supportless.base.errors import InputError
+from supportless.base.kinematics import euler_to_matrix
+from supportless.search.layout import PoseLayout, find_mirror, require_mirror
 
 
 def test_the_tpose_mirrors_left_onto_right(tpose_rig):
@@ -49,7 +49,7 @@ def test_a_symmetric_search_finds_a_mirror_symmetric_pose(tpose_rig):
 
 def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
     """Rotation vectors longer than a joint's limit stand for the rotation at the limit."""
-    from supportless.prior import joint_angles
+    from supportless.search.prior import joint_angles
 
     rig = tpose_rig
     limits = np.radians(np.linspace(10.0, 50.0, rig.bone_count))

@@ -1,13 +1,13 @@
-"""Volume meshes (:mod:`supportless.tetmesh`): a failure is one error, with nothing printed or left behind; fTetWild takes surfaces TetGen cannot."""
+"""Volume meshes (:mod:`supportless.rig.tetmesh`): a failure is one error, with nothing printed or left behind; fTetWild takes surfaces TetGen cannot."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from meshes import box
-from supportless.errors import InputError
-from supportless.tetmesh import ftetwild_volume, tetrahedralize_surface, tetrahedralize_with_skeleton
+
+from supportless.base.errors import InputError
+from supportless.rig.tetmesh import ftetwild_volume, tetrahedralize_surface, tetrahedralize_with_skeleton
 
 
 def crossing_boxes():
@@ -69,14 +69,14 @@ def test_a_surface_that_cuts_itself_still_gets_a_volume_mesh_with_its_vertices_f
 def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
     """OBJ + TGF of two boxes pushed through each other: TetGen refuses, the winding-number surface is meshed."""
     from supportless.copyleft.cgal import intersecting_face_pairs
-    from supportless.io import check_closed_surface
-    from supportless.tetmesh import tetrahedralize_with_skeleton_or_remake
+    from supportless.files.meshes import check_closed_surface
+    from supportless.rig.tetmesh import tetrahedralize_with_skeleton_or_remake
 
     V, F = crossing_boxes()
     J = np.array([[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]])
     Vs, Fs, TV, TT, note = tetrahedralize_with_skeleton_or_remake(V, F, J, np.array([[0, 1]]))
     assert note is not None and "crosses itself" in note and "winding number" in note
-    check_closed_surface(Vs, Fs)
+    check_closed_surface(Fs)
     assert intersecting_face_pairs(Vs, Fs) == 0
     np.testing.assert_array_equal(TV[: len(Vs)], Vs)
     np.testing.assert_allclose(tet_volumes(TV, TT).sum(), 2.5, rtol=0.02)

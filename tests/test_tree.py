@@ -18,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import supportless as sl
-from supportless import kinematics as kin
+from supportless.base import kinematics as kin
 from supportless.shapes import DEMO_FIGURES
 
 
@@ -189,7 +189,7 @@ def test_turning_a_rigs_root_is_rigid(any_rig):
 
 
 def test_a_pose_of_the_old_torn_tree_is_refused(bunny_rig, tmp_path):
-    from supportless.posefile import read_pose, write_pose
+    from supportless.files.posefile import read_pose, write_pose
 
     rig = bunny_rig
     old = kin.reroot(rig.bones, kin.bone_parents(rig.bones), rig.root_bone)
@@ -206,7 +206,7 @@ def test_a_pose_of_the_old_torn_tree_is_refused(bunny_rig, tmp_path):
 
 
 def test_a_version_1_pose_of_an_unchanged_tree_is_read(branch_rig, tmp_path):
-    from supportless.posefile import read_pose, write_pose
+    from supportless.files.posefile import read_pose, write_pose
 
     rig = branch_rig
     old = kin.reroot(rig.bones, kin.bone_parents(rig.bones), rig.root_bone)

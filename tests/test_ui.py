@@ -1,4 +1,4 @@
-"""Tests of the viser web app (supportless.ui): the app wired to a server, and
+"""Tests of the viser web app (supportless.apps.ui): the app wired to a server, and
 the page itself driven through Playwright in Debian's Chromium. The editing
 state alone (no server) is tested in test_ui_state.py.
 
@@ -8,22 +8,21 @@ The browser test saves a screenshot to ``test-artifacts/ui.png``.
 from __future__ import annotations
 
 import re
-import time
 import socket
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import unavailable
-from supportless import io as sio
-from supportless import posefile
-from supportless.errors import InputError
-from supportless.geometry import print_pose, print_transform
-from supportless.orientation import rotation_between
-from supportless.rig import load_rig
-from supportless.settings import SearchSettings
-from supportless.ui import App, find_free_port
+
+from supportless.files import posefile
+from supportless.apps.ui import App, find_free_port
+from supportless.base.errors import InputError
+from supportless.base.geometry import print_pose, print_transform
+from supportless.rig.rig import load_rig
+from supportless.search.orientation import rotation_between
+from supportless.search.settings import SearchSettings
 
 ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
 
@@ -76,7 +75,7 @@ def test_a_bad_host_is_said_as_such_not_as_a_taken_port(rig, host, words):
 
 
 def test_page_url():
-    from supportless.ui.ports import page_url
+    from supportless.apps.ui.ports import page_url
 
     assert page_url("127.0.0.1", 8080) == "http://127.0.0.1:8080"
     assert page_url("127.0.0.1", 8080, "abc") == "http://127.0.0.1:8080/?token=abc"
@@ -136,8 +135,9 @@ def test_undo_redo_reset(app, rig):
 
 
 def test_gizmo_drag_becomes_relative_euler_angles_and_one_undo_step(app, rig):
-    from supportless.kinematics import euler_to_matrix
     from test_ui_state import gizmo_turn
+
+    from supportless.base.kinematics import euler_to_matrix
 
     app.reset()
     child, before, target, world = gizmo_turn(rig)
@@ -189,7 +189,7 @@ def test_save_and_load_pose(app, rig, tmp_path):
 
 
 def test_print_view_shows_the_pose_turned_onto_the_plate(app, rig):
-    from supportless.ui.scene import quat_from_matrix
+    from supportless.apps.ui.scene import quat_from_matrix
 
     app.reset()
     b = rig.bone_count - 1

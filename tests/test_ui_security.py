@@ -7,7 +7,6 @@ values the widgets would never send.
 
 import http.client
 import os
-import time
 from urllib.parse import urlsplit
 
 import numpy as np
@@ -16,9 +15,9 @@ import viser
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
-from supportless.errors import InputError
-from supportless.ui.guard import Guard, is_loopback
-from supportless.ui.state import EditorState
+from supportless.apps.ui.guard import Guard, is_loopback
+from supportless.apps.ui.state import EditorState
+from supportless.base.errors import InputError
 
 PROTOCOL = f"viser-v{viser.__version__}"
 
@@ -185,14 +184,20 @@ def test_out_of_range_settings_from_a_client_are_refused(app, name, value):
 def test_the_cli_refuses_the_same_ranges(tmp_path):
     from click.testing import CliRunner
 
-    from supportless.cli import main
+    from supportless.apps.cli import main
+    from supportless.apps.ui.panel import NUMBER_SETTINGS
+    from supportless.search.settings import RANGES
 
     out = CliRunner().invoke(main, ["optimize", "demo:branch", "--particles", "99999999", "-o", str(tmp_path / "x.stl")])
-    assert out.exit_code == 2 and "particles must be within" in out.stderr
+    low, high = RANGES["particles"]
+    assert out.exit_code == 2 and f"{low}<=x<={high}" in out.stderr  # the settings' own range
+    fields = {name: limits for name, _, limits in NUMBER_SETTINGS}
+    assert (fields["particles"]["min"], fields["particles"]["max"]) == (low, high)  # and the app's
+    assert (fields["iterations"]["min"], fields["overhang_angle"]["max"]) == (RANGES["iterations"][0], 90.0)
 
 
 def test_a_network_host_is_said_as_such(branch_rig, tmp_path, capfd):
-    from supportless.ui.app import run_app
+    from supportless.apps.ui.app import run_app
 
     a = run_app(branch_rig, host="0.0.0.0", block=False, workdir=tmp_path)
     try:
@@ -243,7 +248,7 @@ def test_a_client_changes_values_only_and_no_disabled_button_fires(app):
 
     from viser import _messages
 
-    from supportless.ui.guard import value_updates
+    from supportless.apps.ui.guard import value_updates
 
     interface = app.server._websock_server
     handlers = interface._incoming_handlers[_messages.GuiUpdateMessage]

@@ -1,4 +1,4 @@
-"""The viewer's editing state (supportless.ui.state) without a browser, a server or viser."""
+"""The viewer's editing state (supportless.apps.ui.state) without a browser, a server or viser."""
 
 from __future__ import annotations
 
@@ -8,16 +8,15 @@ import json
 import numpy as np
 import pytest
 
-from supportless import io as sio
-from supportless import posefile
-from supportless.errors import SupportlessError
-from supportless.geometry import print_pose
-from supportless.kinematics import euler_to_matrix
-from supportless.orientation import print_direction, rotation_axis_angle, rotation_between
-from supportless.report import pose_measures
-from supportless.search import optimize
-from supportless.settings import SearchSettings
-from supportless.ui.state import EditorState
+from supportless.files import posefile
+from supportless.apps.ui.state import EditorState
+from supportless.base.errors import SupportlessError
+from supportless.base.geometry import print_pose
+from supportless.base.kinematics import euler_to_matrix
+from supportless.report.report import pose_measures
+from supportless.search.optimizer import optimize
+from supportless.search.orientation import print_direction, rotation_axis_angle, rotation_between
+from supportless.search.settings import SearchSettings
 
 
 @pytest.fixture()
@@ -38,7 +37,7 @@ def test_needs_no_viser():
     import subprocess
     import sys
 
-    code = ("import sys; import supportless.ui.state; "
+    code = ("import sys; import supportless.apps.ui.state; "
             "assert 'viser' not in sys.modules, 'the editing state imported viser'")
     subprocess.run([sys.executable, "-c", code], check=True)
 
@@ -263,9 +262,9 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
 
 
 def test_planar_rig_turns_about_the_plane_normal(rig_cache_dir, tmp_path):
+    from supportless.base.kinematics import planar_rotation
     from supportless.energies.surface import boundary_edges
-    from supportless.kinematics import planar_rotation
-    from supportless.rig import load_rig
+    from supportless.rig.rig import load_rig
 
     rig = load_rig("demo:woody2d", cache_dir=rig_cache_dir)
     state = EditorState(rig, workdir=tmp_path)
@@ -458,7 +457,7 @@ def test_pose_files_keep_the_print_rotation(state, branch_rig, tmp_path):
 
 def test_the_front_slider_sets_the_pose_and_rotation(tpose_rig, tmp_path):
     """Headless: find a front in the background, then each slider position shows its pose (an undo step each)."""
-    from supportless.ui.front import FrontBrowser
+    from supportless.apps.ui.front import FrontBrowser
 
     state = EditorState(tpose_rig, settings=SearchSettings(particles=24, iterations=8, seed=3), workdir=tmp_path)
     seen = _events(state)

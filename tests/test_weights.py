@@ -1,12 +1,12 @@
-"""Bounded biharmonic weights (:mod:`supportless.weights`) on a bar with two bones."""
+"""Bounded biharmonic weights (:mod:`supportless.rig.weights`) on a bar with two bones."""
 
 from __future__ import annotations
 
 import numpy as np
-
 from meshes import box
-from supportless.tetmesh import tetrahedralize_with_skeleton
-from supportless.weights import compute_weights
+
+from supportless.rig.tetmesh import tetrahedralize_with_skeleton
+from supportless.rig.weights import compute_weights
 
 
 def test_weights_are_a_partition_of_unity_fixed_on_the_bones_and_change_along_the_bar():
@@ -60,8 +60,8 @@ def test_a_part_with_no_bone_follows_the_nearest_bone_and_is_named():
 def test_given_weights_are_checked_and_named():
     import pytest
 
-    from supportless.errors import InputError
-    from supportless.weights import check_weights
+    from supportless.base.errors import InputError
+    from supportless.rig.weights import check_weights
 
     W = np.array([[0.25, 0.75], [1.0, 0.0], [0.5, 0.5]])
     np.testing.assert_array_equal(check_weights(W), W)  # good rows come back as given
@@ -82,8 +82,8 @@ def test_a_crash_in_the_weight_solver_is_one_line_not_a_dead_process(monkeypatch
     import pytest
 
     import supportless as sl
-    import supportless.weights as weights
-    from supportless.errors import InputError
+    import supportless.rig.weights as weights
+    from supportless.base.errors import InputError
 
     def aborts(*args):
         os.abort()

@@ -5,5 +5,5 @@
 
 Nothing else in the package imports ``igl.copyleft``, so the licence
 questions and a possible replacement stay in these two files. Both import
-only :mod:`supportless.isolated` and :mod:`supportless.errors`.
+only :mod:`supportless.base.isolated` and :mod:`supportless.base.errors`.
 """

@@ -97,7 +97,7 @@ def self_union(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
     CGAL splits every triangle along the curves where others cross it and
     keeps the pieces on the outside (winding number > 0), rounding the new
     vertices to doubles at the end. Runs in a child process
-    (:func:`supportless.isolated.run_isolated`): a crash inside CGAL is an
+    (:func:`supportless.base.isolated.run_isolated`): a crash inside CGAL is an
     error, not the end of the program.
 
     Parameters
@@ -111,14 +111,14 @@ def self_union(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
     vertices : (n', 3) float64
     faces : (f', 3) int64
         May hold zero-area triangles where the cut curves meet edges
-        (:func:`supportless.printbody.print_body` collapses them).
+        (:func:`supportless.files.printbody.print_body` collapses them).
 
     Raises
     ------
-    supportless.isolated.NativeFailure
+    supportless.base.isolated.NativeFailure
         When CGAL fails or crashes.
     """
-    from ..isolated import run_isolated
+    from ..base.isolated import run_isolated
 
     V = np.ascontiguousarray(vertices, np.float64)
     F = np.ascontiguousarray(faces, np.int64)

@@ -1,6 +1,6 @@
 """TetGen (AGPL, through ``igl.copyleft.tetgen``): volume meshes of a closed surface.
 
-Each call runs in a child process (:func:`supportless.isolated.run_isolated`):
+Each call runs in a child process (:func:`supportless.base.isolated.run_isolated`):
 TetGen aborts or segfaults on some surfaces that cut themselves, prints
 even when asked to be quiet, and writes ``tetgen-tmpfile_skipped.*`` files
 into the working folder; in the child all three stay there.
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..isolated import run_isolated
+from ..base.isolated import run_isolated
 
 __all__ = ["tetgen_surface", "tetgen_with_skeleton"]
 
@@ -32,7 +32,7 @@ def tetgen_surface(vertices: np.ndarray, faces: np.ndarray, flags: str) -> tuple
 
     Raises
     ------
-    supportless.isolated.NativeFailure
+    supportless.base.isolated.NativeFailure
         When TetGen fails, crashes or makes no tetrahedra.
     """
     V = np.ascontiguousarray(vertices, np.float64)
@@ -60,7 +60,7 @@ def tetgen_with_skeleton(vertices: np.ndarray, faces: np.ndarray, joints: np.nda
 
     Raises
     ------
-    supportless.isolated.NativeFailure
+    supportless.base.isolated.NativeFailure
     """
     args = (np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64),
             np.ascontiguousarray(joints, np.float64), np.ascontiguousarray(bones, np.int64), int(samples_per_bone),

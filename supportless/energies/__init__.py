@@ -8,5 +8,5 @@
 * :mod:`.surface`: what they share: argument checks (:func:`.surface.prepare`,
   ``up`` as ``"-z"`` or a vector), orientation, 2D boundary edges, the frame of ``up``;
 * :mod:`.arap`: as-rigid-as-possible deformation energy;
-* :mod:`.balance`: new plate contacts and balance.
+* :mod:`.slicer_model`: PrusaSlicer's support filament predicted from the column volume (fitted).
 """

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..geometry import parse_up
+from ..base.geometry import parse_up, plane_basis
 
 __all__ = [
     "BACKENDS",
@@ -58,7 +58,7 @@ def prepare(vertices, faces, up):
     up : str or (d,) array_like of float
         Printing direction.  A string is an axis name ``"x" | "y" | "z" | "-x"
         | "-y" | "-z"`` or numbers ``"0,1,0"`` / ``"0 1 0"``, read by
-        :func:`supportless.geometry.parse_up` (in 2D an axis in the plane).  A
+        :func:`supportless.base.geometry.parse_up` (in 2D an axis in the plane).  A
         vector is any finite nonzero vector of length ``d``, normalised here.
 
     Returns
@@ -74,7 +74,7 @@ def prepare(vertices, faces, up):
 
     Raises
     ------
-    supportless.errors.InputError
+    supportless.base.errors.InputError
         For a string that names no direction (or, in 2D, one out of the plane).
     ValueError
         For vertices of the wrong shape, or a vector ``up`` of the wrong
@@ -232,31 +232,6 @@ def boundary_edges(faces, vertices=None):
 # ---------------------------------------------------------------------------
 # frame of the printing direction
 # ---------------------------------------------------------------------------
-
-
-def plane_basis(up):
-    """Orthonormal basis of the plane orthogonal to ``up``.
-
-    Parameters
-    ----------
-    up : (d,) float64
-        Unit vector, ``d`` in {2, 3}.
-
-    Returns
-    -------
-    B : (d - 1, d) float64
-        Rows span the plane orthogonal to ``up``; the frame
-        ``(B[0], ..., up)`` is right-handed (determinant +1).
-    """
-    up = np.asarray(up, dtype=np.float64)
-    if up.shape[0] == 2:
-        return np.array([[up[1], -up[0]]])
-    helper = np.zeros(3)
-    helper[np.argmin(np.abs(up))] = 1.0
-    e1 = np.cross(helper, up)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(up, e1)
-    return np.stack([e1, e2])
 
 
 def frame_matrix(up):

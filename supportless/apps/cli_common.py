@@ -1,0 +1,219 @@
+"""What the commands share: exit statuses, one-line errors, loading a rig, the rig and search options.
+
+Separate from :mod:`supportless.apps.cli` so that commands in other modules
+(:mod:`supportless.apps.cli_batch`) use the same options and errors without
+importing the command group.
+"""
+
+from __future__ import annotations
+
+import errno
+import sys
+
+import click
+
+from ..base.errors import SupportlessError
+from ..base.terminal import ClosableStdout, drop_stdout
+from ..files.printframe import DEFAULT_HEIGHT_MM
+
+EXIT_USER_ERROR = 2
+#: Exit status when an output file could not be written (the others were).
+EXIT_WRITE_FAILED = 1
+#: Exit status of a search stopped by Ctrl-C, after its best pose is written.
+EXIT_INTERRUPTED = 130
+#: Exit status when a tool the command needs (PrusaSlicer) is missing or fails.
+EXIT_MISSING_TOOL = 3
+
+
+def _fail(message: str) -> None:
+    click.echo(f"supportless: error: {message}", err=True)
+    sys.exit(EXIT_USER_ERROR)
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(file=ClosableStdout(sys.stdout), highlight=False)
+
+
+def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None,
+          keep_units=False):
+    """The rig of MODEL and its print frame (:mod:`supportless.files.printframe`; :func:`_say_frame` says it).
+
+    The rig stays in the file's units; ``height_mm`` and ``keep_units`` only
+    choose how the files are printed.
+    """
+    from ..base.crash import stage
+    from ..files.printframe import rig_print_frame
+    from ..rig.rig import load_rig
+
+    stage("preparing the rig")
+
+    def progress(msg):
+        if not quiet:
+            click.echo(f"  {msg} ...", err=True)
+
+    if keep_units and height_mm is not None:
+        _fail("--keep-units and --height-mm do not go together; choose one")
+    rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
+                   progress=progress)
+    source = rig.info.get("gltf")
+    if source is not None:  # what was done to the glTF asset, one line per step
+        for line in source["log"]:
+            if not quiet and not line.startswith("warning"):
+                click.echo(f"  glTF: {line}", err=True)
+    for warning in rig.info.get("warnings", []):
+        if source is not None and warning in source["log"] and not warning.startswith("warning"):
+            continue
+        click.echo(f"supportless: warning: {rig.name}: {warning.removeprefix('warning: ')}", err=True)
+    return rig, rig_print_frame(rig, height_mm, keep_units)
+
+
+def _say_frame(rig, frame, quiet=False) -> None:
+    """The printed size in one line on stderr (unless ``quiet``); a size far from a figure's is a warning."""
+    if not quiet:
+        click.echo(f"  {frame.note()}", err=True)
+    if (unusual := frame.unusual()) is not None:
+        click.echo(f"supportless: warning: {rig.name}: {unusual}", err=True)
+
+
+def rig_options(f):
+    """Options shared by every command that reads a rigged model."""
+    f = click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
+                     help="Rig cache folder (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")(f)
+    f = click.option("--no-cache", is_flag=True, help="Prepare the rig again; do not read or write the cache.")(f)
+    f = click.option("--keep-units", is_flag=True,
+                     help="Print the model at the file's own size, its units read as millimetres (glTF metres "
+                          "become millimetres).")(f)
+    f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
+                     help=f"Print the rest pose this tall along --up, in millimetres [default: {DEFAULT_HEIGHT_MM:g}]. "
+                          "Written files are +Z up, in millimetres, on the plate.")(f)
+    f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed skinning weights (.dmat, one row per --tets vertex); for a glTF model "
+                          "'skin' (its own weights, the default) or 'bbw' (recomputed).")(f)
+    f = click.option("--tets", type=click.Path(dir_okay=False), default=None,
+                     help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
+    f = click.option("--up", default="y", show_default=True,
+                     help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
+    f = click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None,
+                     help="TGF skeleton (default: MODEL with .tgf; a rigged .glb/.gltf needs none).")(f)
+    return f
+
+
+class _Group(click.Group):
+    """Turns the package's own errors into one line and exit status 2; a failed write into one line and
+    :data:`EXIT_WRITE_FAILED`."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except SupportlessError as exc:
+            _fail(str(exc))
+        except KeyboardInterrupt:
+            click.echo("supportless: interrupted", err=True)
+            sys.exit(EXIT_INTERRUPTED)
+        except BrokenPipeError:  # the reader of stdout went away; the files are written before the summary
+            drop_stdout()
+            sys.exit(0)
+        except OSError as exc:  # a full disk, a read-only or vanished folder while writing: one line
+            if exc.errno not in _WRITE_ERRNOS:
+                raise
+            where = f"{exc.filename}: " if exc.filename else ""
+            hint = "free some space" if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG) else \
+                "check the permissions, or choose another folder"
+            click.echo(f"supportless: error: {where}{exc.strerror or exc}; {hint}", err=True)
+            sys.exit(EXIT_WRITE_FAILED)
+
+
+#: Errors of a file the tool writes that say where and why in one line (:class:`_Group`).
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EFBIG, errno.EIO}
+
+
+def _search_options(f):
+    """The search's options; their defaults are :class:`~supportless.search.settings.SearchSettings`'s."""
+    from ..search.settings import RANGES, SearchSettings
+
+    d = SearchSettings()
+    opts = [
+        click.option("--optimizer", type=click.Choice(["pso", "cma"]), default=d.optimizer, show_default=True,
+                     help="pso: the paper's particle swarm, --particles for --iterations; cma: CMA-ES, "
+                          "--particles/5 samples per generation for --iterations generations (faster, "
+                          "sometimes worse)."),
+        click.option("--particles", default=d.particles, show_default=True, type=click.IntRange(*RANGES["particles"])),
+        click.option("--iterations", default=d.iterations, show_default=True,
+                     type=click.IntRange(*RANGES["iterations"])),
+        click.option("--seed", default=d.seed, show_default=True, type=click.IntRange(*RANGES["seed"])),
+        click.option("--polish", default=d.polish, type=click.IntRange(*RANGES["polish"]),
+                     help="Generations of a local CMA-ES from the swarm's best pose, small steps [default: on a "
+                          "dense model, after the search on its simplified proxy, on the full surface; none "
+                          "otherwise]."),
+        click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
+                     help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
+                          "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),
+        click.option("--overhang-angle", default=None, type=click.FloatRange(*RANGES["overhang_angle"]),
+                     help="Overhang threshold, degrees from the build plate [default: the printer profile's: "
+                          f"support_material_threshold + 1, or PrusaSlicer's automatic one, {d.overhang_angle:.1f} "
+                          "for its defaults]."),
+        click.option("--overhang-margin", default=d.overhang_margin, show_default=True,
+                     type=click.FloatRange(*RANGES["overhang_margin"]),
+                     help="The search treats faces up to threshold + margin as needing support, so none "
+                          "are left just past the threshold, where slicers still support them."),
+        click.option("--w-arap", type=float, default=d.w_arap, show_default=True,
+                     help="Weight of the distortion term."),
+        click.option("--w-overhang", type=float, default=d.w_overhang, show_default=True,
+                     help="Weight of the support term."),
+        click.option("--w-intersect", type=float, default=d.w_intersect, show_default=True,
+                     help="Weight of the self-intersection term."),
+        click.option("--overhang-model", type=click.Choice(["prism", "column", "slicer"]), default=d.overhang_model,
+                     show_default=True,
+                     help="Support estimate the search minimises: the paper's prisms, columns to the body "
+                          "below, or the slicer model fitted to PrusaSlicer (3D)."),
+        click.option("--w-prior", type=float, default=d.w_prior, show_default=True,
+                     help="Weight of the natural-pose prior (turning much of the body costs more)."),
+        click.option("--joint-limit", type=click.FloatRange(*RANGES["joint_limit"]), default=d.joint_limit,
+                     show_default=True, help="Largest rotation of any joint, degrees (one angle); 0 with "
+                                             "--orient free turns the model without posing it."),
+        click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
+                     help="free: choose the print orientation with the pose (-o is written turned); "
+                          "keep: print the model as it stands."),
+        click.option("--limit", "limits", multiple=True,
+                     help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
+        click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
+                     help="Reject poses that touch the plate with a new part or would fall over."),
+        click.option("--symmetric", is_flag=True, default=d.symmetric,
+                     help="Keep left/right pairs of bones mirror images (found from the rest skeleton)."),
+        click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
+        click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _printer_profile(path):
+    """The printer profile of ``--printer-profile`` (PrusaSlicer's defaults when None)."""
+    from ..files.printer import default_profile, read_printer_profile
+
+    return default_profile() if path is None else read_printer_profile(path)
+
+
+def _settings(profile=None, **options):
+    """The :class:`~supportless.search.settings.SearchSettings` of the search options.
+
+    ``overhang_angle=None`` takes the threshold of ``profile``.
+    """
+    from ..search.settings import SearchSettings
+
+    if options.get("overhang_angle", 0.0) is None:
+        options["overhang_angle"] = (profile or _printer_profile(None)).overhang_angle
+    return SearchSettings(**options)  # bad values are InputError: one line
+
+
+def _require_slicer(option: str) -> None:
+    """Exit with one line (status 3) before any work when PrusaSlicer is missing."""
+    from ..slicing.prusaslicer import find_prusa_slicer
+
+    if not find_prusa_slicer():
+        click.echo(f"supportless: error: {option} needs PrusaSlicer, which was not found "
+                   "(apt-get install prusa-slicer, or set SUPPORTLESS_PRUSA_SLICER)", err=True)
+        sys.exit(EXIT_MISSING_TOOL)

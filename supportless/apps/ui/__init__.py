@@ -1,0 +1,13 @@
+"""Interactive viewer and editor (a local web page served with viser).
+
+* :mod:`supportless.apps.ui.state`: the editing state (pose, undo/redo, files,
+  search settings, measures, background search), usable without a browser;
+* :mod:`supportless.apps.ui.scene`: the 3D view; :mod:`supportless.apps.ui.panel`: the
+  side panel; :mod:`supportless.apps.ui.ports`: which port the server takes;
+* :mod:`supportless.apps.ui.app`: :class:`App` wires them, :func:`run_app` serves the page.
+"""
+
+from .app import App, run_app
+from .ports import find_free_port
+
+__all__ = ["App", "find_free_port", "run_app"]

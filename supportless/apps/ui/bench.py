@@ -1,0 +1,90 @@
+"""Measure the viewer's input-to-update latency on a model.
+
+    python -m supportless.apps.ui.bench MODEL [--skeleton S.tgf] [--up y] [--edits 40] [--browser /usr/bin/chromium]
+
+Server side: from an edit reaching the app (what a slider callback does) to
+(1) the new bone frames being flushed to the browser (``mesh``) and (2) the
+energies, support estimates and overlays being recomputed and sent (``full``).
+With ``--browser``, also end to end in headless Chromium: from a key press on
+a slider to the redrawn energies appearing in the page.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+__all__ = ["browser_latency", "main", "server_latency"]
+
+
+def server_latency(app, edits: int = 40, bone: int | None = None) -> dict:
+    """Median and max latencies (ms) of ``edits`` single-angle edits, one at a time."""
+    bone = app.rig.bone_count - 1 if bone is None else bone
+    app.wait_idle(60)
+    mesh, full = [], []
+    for k in range(edits):
+        app.state.set_bone_angles(bone, [0.0, 0.0, (k % 2) * 20.0 + k * 0.5], key=None)
+        app.wait_idle(30)
+        mesh.append(app.latency_ms["mesh"])
+        full.append(app.latency_ms["full"])
+    return {"mesh_median": float(np.median(mesh)), "mesh_max": float(np.max(mesh)),
+            "full_median": float(np.median(full)), "full_max": float(np.max(full))}
+
+
+def browser_latency(app, chromium: str, presses: int = 20) -> dict:
+    """Key press on the Z slider -> redrawn energies in the page, ms (median, max)."""
+    from playwright.sync_api import sync_playwright
+
+    times = []
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=[
+            "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+            "--disable-background-networking"])
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(app.url)
+        page.get_by_text("Objective:").wait_for(timeout=60000)
+        slider = page.get_by_role("slider").nth(2)
+        slider.focus()
+        # the energies list changes on every redraw (it shows the update time)
+        get = "() => (document.body.innerText.match(/Objective:[^]*Update time:[^\\n]*/) || [])[0]"
+        for _ in range(presses):
+            before = page.evaluate(get)
+            t0 = time.perf_counter()
+            slider.press("ArrowRight")
+            page.wait_for_function(f"b => ({get})() !== b", arg=before, timeout=20000, polling=10)
+            times.append(1e3 * (time.perf_counter() - t0))
+            page.wait_for_timeout(50)
+        browser.close()
+    return {"page_median": float(np.median(times)), "page_max": float(np.max(times))}
+
+
+def main(argv=None) -> None:
+    from ...rig.rig import load_rig
+    from .app import App
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("model")
+    ap.add_argument("--skeleton")
+    ap.add_argument("--up", default="y")
+    ap.add_argument("--edits", type=int, default=40)
+    ap.add_argument("--browser", help="path of a Chromium to also measure in the page")
+    args = ap.parse_args(argv)
+    rig = load_rig(args.model, skeleton=args.skeleton, up=args.up)
+    app = App(rig, verbose=False)
+    try:
+        print(f"{rig!r}")
+        res = server_latency(app, args.edits)
+        print("server: mesh (bone frames sent) median {mesh_median:.1f} ms, max {mesh_max:.1f} ms; "
+              "with energies/overlays median {full_median:.1f} ms, max {full_max:.1f} ms".format(**res))
+        if args.browser:
+            res = browser_latency(app, args.browser)
+            print("page: key press -> energies redrawn median {page_median:.1f} ms, "
+                  "max {page_max:.1f} ms".format(**res))
+    finally:
+        app.stop()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,350 @@
+"""The control panel of the viewer (viser's GUI): energies, pose, search, files.
+
+:class:`Panel` builds the widgets, sends what the user does to the app's
+actions and shows what the app gives it. Its search settings start at the
+state's :class:`~supportless.search.settings.SearchSettings` (by default the tool's
+defaults), so the page has no defaults of its own.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...search.objective import OVERHANG_MODELS
+from ...search.settings import ORIENT_MODES, RANGES, SearchSettings
+from .scene import MESH_OPACITY
+
+__all__ = ["NUMBER_SETTINGS", "Panel", "VIEWS", "measures_markdown", "turn_text"]
+
+#: The view choices of the panel: label -> frame (:data:`supportless.apps.ui.state.FRAMES`).
+VIEWS = {"standing": "standing", "as printed": "print"}
+
+#: The numeric search settings in the panel: field, label, step (their limits are the settings' own RANGES).
+_FIELDS = (
+    ("particles", "Particles", 1),
+    ("iterations", "Iterations", 1),
+    ("seed", "Seed", 1),
+    ("joint_limit", "Joint limit °", 1.0),
+    ("w_arap", "w ARAP", 0.1),
+    ("w_overhang", "w overhang", 0.1),
+    ("w_intersect", "w intersect", 1.0),
+    ("overhang_angle", "Overhang angle °", 1.0),
+    ("overhang_margin", "Overhang margin °", 1.0),
+)
+NUMBER_SETTINGS = tuple((name, label, {"step": step} | {key: bound for key, bound in zip(("min", "max"), RANGES[name])
+                                                          if bound is not None})
+                        for name, label, step in _FIELDS)
+
+
+def _fmt(x: float | None, spec: str = ".4g") -> str:
+    return "n/a" if x is None else format(float(x), spec)
+
+
+def _vs_rest(x: float | None) -> str:
+    if x is None:
+        return "rest pose needs none"
+    return f"{x:.1f} % less than rest" if x >= 0 else f"{-x:.1f} % more than rest"
+
+
+def _vector(v) -> str:
+    return "(" + ", ".join(f"{x:.2f}" for x in np.asarray(v, np.float64) + 0.0) + ")"
+
+
+def turn_text(m: dict) -> str:
+    """How the pose is printed, from :meth:`~supportless.apps.ui.state.EditorState.measure`'s
+    ``turn_deg``, ``turn_axis`` ((3,) or None in 2D) and ``print_direction`` ((d,))."""
+    if abs(m["turn_deg"]) < 0.05:
+        return "as it stands (not turned)"
+    about = "counter-clockwise" if m["turn_axis"] is None else f"about {_vector(m['turn_axis'])}"
+    return (f"turned {m['turn_deg']:.1f}° {about}; the model's {_vector(m['print_direction'])} "
+            f"printed upward")
+
+
+def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int) -> str:
+    """The energies list of the panel.
+
+    Parameters
+    ----------
+    m : dict
+        :meth:`supportless.apps.ui.state.EditorState.measure` of the pose.
+    settings : SearchSettings
+        The settings that objective belongs to (weights, thresholds).
+    latency : dict
+        ``mesh`` and ``full`` update times, ms.
+    dim : int
+        2 for a planar rig.
+    """
+    t = m["terms"]
+    inter = m.get("intersecting_faces")
+    inter_txt = ("not checked (2D)" if dim == 2 else "n/a" if inter is None
+                 else f"{len(inter)} faces" + (" (magenta)" if len(inter) else ""))
+    red = m.get("reduction", {})
+    turned = abs(m["turn_deg"]) >= 0.05
+    up = m["upright"]
+    standing = ([f"- Standing (not turned): support (prism) {_fmt(up['support_prism'])} · (column) "
+                 f"{_fmt(up['support_column'])} · {int(np.sum(m['risky_standing']))} risky faces"]
+                if turned else [])
+    return "\n".join([
+        f"- Objective: **{_fmt(m['objective'])}** (what Optimize minimises)",
+        f"- Printed: {turn_text(m)}" + ("; support counted as printed" if turned else ""),
+        f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g})",
+        f"- Overhang term: {_fmt(t['overhang'])} (× {settings.w_overhang:g}, faces past "
+        f"{settings.search_overhang_angle:.3g}°)",
+        f"- Intersection term: {_fmt(t['intersection'])} (× {settings.w_intersect:g})",
+        f"- Support (prism): {_fmt(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
+        f"- Support (column): {_fmt(m['support_column'])} ({_vs_rest(red.get('support_column'))})",
+        f"- Risky faces (past {m['overhang_angle']:g}°): {int(np.sum(m['risky']))} · "
+        f"self-intersecting: {inter_txt}",
+        *standing,
+        f"- Update time: mesh {latency.get('mesh', 0):.1f} ms · with energies {latency.get('full', 0):.1f} ms",
+    ])
+
+
+class Panel:
+    """The widgets of the page's side panel.
+
+    Parameters
+    ----------
+    gui : viser.GuiApi
+    app : supportless.apps.ui.app.App
+        Receives the actions (``undo``, ``start_optimize``, ``save_pose``...).
+
+    Attributes
+    ----------
+    settings : dict of str -> viser GUI handle
+        The search-settings widgets, by :class:`SearchSettings` field.
+    invalid : dict of str -> str
+        Settings whose value in the panel the state refused, and why.
+    status, measures, bone_info, fixed_info, search_info : viser markdown handles
+    sliders : list of viser slider handles
+        X, Y, Z angle of the selected bone, degrees.
+    view : viser dropdown handle
+        Show the model standing or as printed (a label of :data:`VIEWS`).
+    """
+
+    def __init__(self, gui, app):
+        self.gui = gui
+        self.app = app
+        self.rig = app.rig
+        self.names = self.rig.bone_names()
+        gui.configure_theme(control_width="large", dark_mode=False)
+        self.status = gui.add_markdown("**Status:** ready")
+        with gui.add_folder("Energies"):
+            self.measures = gui.add_markdown("computing…")
+        self._add_pose_folder()
+        self._add_search_folder(app.state.settings)
+        self._add_front_folder()
+        self._add_files_folder()
+
+    # ----------------------------------------------------------------- build
+    def _add_pose_folder(self) -> None:
+        g, app = self.gui, self.app
+        with g.add_folder("Pose"):
+            self.bone = g.add_dropdown("Bone", self.names, initial_value=self.names[0],
+                                       hint="Bone to rotate; you can also click a joint")
+            self.sliders = []
+            for i, label in enumerate(("X°", "Y°", "Z°")):
+                sl = g.add_slider(label, min=-180.0, max=180.0, step=1.0, initial_value=0.0,
+                                  disabled=self.rig.dim == 2 and i < 2,
+                                  hint="Euler angle of the selected bone relative to its parent")
+                sl.on_update(self._slider_moved(i))
+                self.sliders.append(sl)
+            g.add_button("Undo").on_click(lambda _e: app.undo())
+            g.add_button("Redo").on_click(lambda _e: app.redo())
+            g.add_button("Reset to rest pose").on_click(lambda _e: app.reset())
+            g.add_button("Print as it stands", hint="Drop the print rotation (keep the pose)").on_click(
+                lambda _e: app.print_upright())
+            self.view = g.add_dropdown("View", tuple(VIEWS), initial_value="standing",
+                                       hint="standing: as the model stands (the bones are edited here); "
+                                            "as printed: turned by the print rotation onto the plate")
+            show_risky = g.add_checkbox("Show risky faces", True)
+            weights = g.add_checkbox("Colour by bone weights", False,
+                                     hint="Colour the mesh by the selected bone's skinning weights")
+            opacity = g.add_slider("Mesh opacity", min=0.1, max=1.0, step=0.05, initial_value=MESH_OPACITY)
+            self.bone_info = g.add_markdown("")
+
+        @self.bone.on_update
+        def _(event):
+            if event.client is not None:
+                app.state.select_bone(self.names.index(self.bone.value))
+
+        @self.view.on_update
+        def _(event):
+            if event.client is not None:
+                app.set_view(frame=VIEWS[self.view.value])
+
+        show_risky.on_update(lambda _e: app.set_view(show_risky=bool(show_risky.value)))
+        weights.on_update(lambda _e: app.set_view(weights=bool(weights.value)))
+        opacity.on_update(lambda _e: app.set_view(opacity=float(opacity.value)))
+
+    def _slider_moved(self, axis: int):
+        def on_update(event):
+            if event.client is not None:  # moved in the page, not by the server
+                self.app.on_slider(axis, float(self.sliders[axis].value))
+        return on_update
+
+    def _add_search_folder(self, settings: SearchSettings) -> None:
+        g, app = self.gui, self.app
+        with g.add_folder("Optimize"):
+            self.settings = {name: g.add_number(label, getattr(settings, name), **limits)
+                             for name, label, limits in NUMBER_SETTINGS}
+            self.settings["overhang_model"] = g.add_dropdown(
+                "Support model", OVERHANG_MODELS, initial_value=settings.overhang_model,
+                hint="prism: the paper's estimate; column: columns down to the plate")
+            self.settings["orient"] = g.add_dropdown(
+                "Orientation", ORIENT_MODES, initial_value=settings.orient,
+                hint="free: search the print orientation with the pose; keep: print as the model stands")
+            self.settings["fix"] = g.add_text("Fix bones", ",".join(settings.fix),
+                                              hint="1-based bone numbers, e.g. 1,4 or 'all'")
+            self.settings["free"] = g.add_text("Free bones", ",".join(settings.free),
+                                               hint="1-based bone numbers to free, or 'all'")
+            self.fixed_info = g.add_markdown("")
+            self.optimize = g.add_button("Optimize", color="green")
+            self.cancel = g.add_button("Cancel search", color="red", disabled=True)
+            self.progress = g.add_progress_bar(0.0)
+            self.search_info = g.add_markdown("idle")
+        self.invalid: dict[str, str] = {}  # setting -> why the state did not take the panel's value
+        for name, h in self.settings.items():
+            h.on_update(self._setting_edited(name))
+        self.optimize.on_click(lambda _e: app.start_optimize())
+        self.cancel.on_click(lambda _e: app.state.cancel_optimize())
+
+    def _add_front_folder(self) -> None:
+        g, app = self.gui, self.app
+        with g.add_folder("Front", expand_by_default=False):
+            self.front_count = g.add_slider("Poses", min=2, max=9, step=1, initial_value=5)
+            self.find_front = g.add_button("Find front",
+                                           hint="Poses from least support to least distortion (about 3 searches)")
+            self.front_pose = g.add_slider("Front pose", min=1, max=2, step=1, initial_value=1, disabled=True)
+            self.front_info = g.add_markdown("no front yet")
+        self.find_front.on_click(lambda _e: app.start_front(int(self.front_count.value)))
+        self.front_pose.on_update(lambda e: app.show_front_pose(int(self.front_pose.value) - 1)
+                                  if e.client is not None else None)
+
+    def show_front(self, front) -> None:
+        """The slider over the front's poses, and their measures."""
+        n = len(front.poses)
+        self.find_front.disabled = False
+        self.front_pose.max = max(n, 2)
+        self.front_pose.disabled = n == 0
+        self.front_info.content = "\n".join(
+            [f"{n} poses, least support first ({front.seconds:.0f} s):"]
+            + [f"- {k}: support {p.support:.4g}, distortion {p.distortion:.3g}" for k, p in enumerate(front.poses, 1)])
+
+    def _setting_edited(self, name: str):
+        def on_update(event):
+            if event.client is not None:  # edited in the page, not set by the server from the state
+                value = self.settings[name].value
+                kind = type(getattr(self.app.state.settings, name))
+                self.app.change_setting(name, kind(value) if kind in (int, float) else value)
+        return on_update
+
+    def _add_files_folder(self) -> None:
+        g, app, name = self.gui, self.app, self.rig.name
+        state = app.state
+        with g.add_folder("Files", expand_by_default=False):
+            pose_path = g.add_text("Pose file", f"{name}-pose.json", hint=f"On the server; relative to {state.workdir}")
+            save, load = g.add_button("Save pose"), g.add_button("Load pose")
+            upload = g.add_upload_button("Upload pose…", mime_type="application/json")
+            dl_pose = g.add_button("Download pose JSON")
+            mesh_path = g.add_text("Mesh file", f"{name}-posed.stl",
+                                   hint="On the server; .stl .3mf .obj .ply; written as printed, on the plate")
+            export = g.add_button("Export mesh to file")
+            dl_stl, dl_3mf = g.add_button("Download STL"), g.add_button("Download 3MF")
+        save.on_click(lambda _e: app.save_pose(pose_path.value))
+        load.on_click(lambda _e: app.load_pose(pose_path.value))
+        export.on_click(lambda _e: app.export_mesh(mesh_path.value))
+        upload.on_upload(lambda _e: app.load_pose_bytes(upload.value.name, upload.value.content))
+        # a download goes to the browser that asked, no other
+        dl_pose.on_click(lambda e: app.download(f"{name}-pose.json", state.pose_bytes, e.client))
+        dl_stl.on_click(lambda e: app.download(f"{name}-posed.stl", lambda: state.mesh_bytes("stl"), e.client))
+        dl_3mf.on_click(lambda e: app.download(f"{name}-posed.3mf", lambda: state.mesh_bytes("3mf"), e.client))
+
+    # ------------------------------------------------------------------ show
+    def show_status(self, text: str, error: bool = False) -> None:
+        """The status line (an error stands out)."""
+        self.status.content = f"**⚠ Error:** {text}" if error else f"**Status:** {text}"
+
+    def show_view(self, frame: str) -> None:
+        """Show which frame the model is drawn in (``standing`` or ``print``)."""
+        label = next(k for k, v in VIEWS.items() if v == frame)
+        if self.view.value != label:
+            self.view.value = label
+
+    def show_measures(self, markdown: str) -> None:
+        """The energies list (see :func:`measures_markdown`)."""
+        self.measures.content = markdown
+
+    def select(self, bone: int, degrees: np.ndarray) -> None:
+        """Show the selected bone in the dropdown and its angles on the sliders.
+
+        Parameters
+        ----------
+        bone : int
+            0-based.
+        degrees : (3,) float64
+            The bone's Euler angles, degrees (rounded to 0.1°).
+        """
+        if self.bone.value != self.names[bone]:
+            self.bone.value = self.names[bone]
+        for sl, v in zip(self.sliders, degrees):
+            v = float(np.clip(np.round(v, 1), -180.0, 180.0))
+            if abs(sl.value - v) > 1e-9:
+                sl.value = v
+
+    def show_bone(self, bone: int, fixed: np.ndarray) -> None:
+        """Describe the selected bone (0-based); ``fixed`` (m,) bool: bones the search keeps."""
+        rig = self.rig
+        kids = int(np.sum(rig.parents == bone))
+        parent = "none" if rig.parents[bone] < 0 else rig.parents[bone] + 1
+        self.bone_info.content = (f"Bone {bone + 1}: joints {rig.bones[bone, 0] + 1}→{rig.bones[bone, 1] + 1}, "
+                                  f"parent {parent}, {kids} child bone(s); "
+                                  f"{'fixed' if fixed[bone] else 'free'} in the search.")
+
+    def show_settings(self, settings: SearchSettings, fixed: np.ndarray) -> None:
+        """Show the search settings in force: the widgets, the fixed bones, the search's threshold.
+
+        A widget whose value the state refused (see :attr:`invalid`) keeps it,
+        with the reason below.
+        """
+        for name, h in self.settings.items():
+            value = getattr(settings, name)
+            if name in self.invalid:
+                continue
+            if isinstance(value, tuple):  # a bone list: keep the text as typed when it means the same
+                if settings.replace(**{name: h.value}) != settings:
+                    h.value = ",".join(value)
+            else:
+                h.value = value
+        fixed_list = ", ".join(str(b + 1) for b in np.flatnonzero(fixed)) or "none"
+        notes = "".join(f"\n\n⚠ {message}" for message in self.invalid.values())
+        orient = (", and turns the model to print it with less (Orientation: free)" if settings.orient == "free"
+                  else "; the model is printed as it stands (Orientation: keep)")
+        self.fixed_info.content = (f"Fixed in the search (grey): bones {fixed_list}. Default: the bones on the "
+                                   "plate and the bones joining them; the rest of the body turns about "
+                                   f"them. The search counts faces past "
+                                   f"{settings.search_overhang_angle:.3g}° (threshold + margin) as needing "
+                                   f"support{orient}.{notes}")
+
+    def search_started(self, total: int) -> None:
+        """Disable Optimize, enable Cancel, empty the progress bar."""
+        self.optimize.disabled = True
+        self.cancel.disabled = False
+        self.progress.value = 0.0
+        self.search_info.content = f"iteration 0 / {total}"
+
+    def show_progress(self, progress: dict) -> None:
+        """Progress bar and best objective of the running search."""
+        it, total, value = progress["iteration"], progress["iterations"], progress["value"]
+        if progress.get("phase"):  # after the search: PrusaSlicer chooses among its answers
+            self.show_status(f"{progress['phase']} with PrusaSlicer ...")
+            return
+        self.progress.value = 100.0 * it / max(total, 1)
+        self.search_info.content = f"iteration {it} / {total} · best objective {_fmt(value)}"
+        self.show_status(f"searching, iteration {it} / {total}, best objective {_fmt(value)}")
+
+    def search_finished(self) -> None:
+        """Enable Optimize again."""
+        self.optimize.disabled = False
+        self.cancel.disabled = True
+        self.progress.value = 100.0

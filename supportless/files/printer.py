@@ -1,0 +1,250 @@
+"""The printer's PrusaSlicer profile: what the overhang threshold is, and what to slice with.
+
+A profile is a PrusaSlicer config as PrusaSlicer exports it (File > Export >
+Export Config: ``key = value`` lines, ``#`` comments). :func:`read_printer_profile`
+reads the keys this tool uses and keeps every other key for the slicer;
+a key the file does not have takes PrusaSlicer's own default
+(:data:`PRUSA_DEFAULTS`). :func:`overhang_threshold` is the slope, in degrees
+from the build plate, under which PrusaSlicer lays down support for that
+profile:
+
+* ``support_material_threshold = T`` (T > 0): PrusaSlicer counts slopes up to
+  ``T + 1`` degrees (it adds one degree so the threshold is inclusive);
+* ``support_material_threshold = 0`` (automatic): a layer is unsupported
+  where it overhangs the layer below by more than half the external
+  perimeter's extrusion width ``w``, which is a slope of
+  ``atan(layer_height / (w / 2))`` -- 53.1 degrees for PrusaSlicer's defaults
+  (0.3 mm layers, 0.45 mm external perimeters from a 0.4 mm nozzle).
+
+Extrusion widths follow PrusaSlicer's rules: 0 means automatic (1.125 x the
+nozzle for external perimeters, 1.05 x for other lines) or the general
+``extrusion_width`` when that is set, and a percentage is of the nozzle
+diameter.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..base.errors import InputError
+
+__all__ = ["DEFAULT_DENSITY", "FILAMENT_DIAMETER_MM", "PRUSA_DEFAULTS", "PrinterProfile", "default_profile", "mm_to_cm3",
+           "overhang_threshold", "read_printer_profile"]
+
+#: PrusaSlicer's built-in defaults of the keys this tool reads (PrusaSlicer
+#: 2.5, no vendor preset): what a profile that lacks a key means.
+PRUSA_DEFAULTS: dict[str, str] = {
+    "layer_height": "0.3",
+    "first_layer_height": "0.35",
+    "nozzle_diameter": "0.4",
+    "filament_diameter": "1.75",
+    "filament_density": "0",
+    "support_material_threshold": "0",
+    "external_perimeter_extrusion_width": "0",
+    "extrusion_width": "0",
+    "support_material_extrusion_width": "0",
+    "support_material_contact_distance": "0.2",
+    "support_material_buildplate_only": "0",
+    "support_material_spacing": "2.5",
+}
+
+#: Density used for grams when the profile gives none (PLA, g/cm3).
+DEFAULT_DENSITY = 1.24
+
+#: The filament diameter when a profile gives none, mm.
+FILAMENT_DIAMETER_MM = 1.75
+
+
+def _number(raw: dict, key: str, source: str) -> float:
+    """The first value of a (possibly per-extruder, comma-separated) numeric key."""
+    text = raw.get(key, PRUSA_DEFAULTS[key]).split(",")[0].strip()
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(source, f"{key} = {raw.get(key)!r} is not a number; fix the value or "
+                                 "remove the line for PrusaSlicer's default") from None
+    if not math.isfinite(value) or value < 0:
+        raise InputError(source, f"{key} = {text} must be a finite number >= 0")
+    return value
+
+
+def _width(raw: dict, key: str, nozzle: float, source: str) -> float:
+    """An extrusion width in mm: absolute, or a percentage of the nozzle, 0 meaning automatic."""
+    text = raw.get(key, PRUSA_DEFAULTS[key]).split(",")[0].strip()
+    if text.endswith("%"):
+        try:
+            return float(text[:-1]) / 100.0 * nozzle
+        except ValueError:
+            raise InputError(source, f"{key} = {text!r} is not a width (mm or a percentage)") from None
+    return _number({key: text}, key, source)
+
+
+@dataclass(frozen=True)
+class PrinterProfile:
+    """The printer settings the search and the slicer share.
+
+    Attributes
+    ----------
+    layer_height, first_layer_height, nozzle_diameter : float
+        mm.
+    support_threshold : float
+        ``support_material_threshold`` as written, degrees (0: automatic).
+    external_perimeter_width : float
+        Width of the external perimeter, mm (automatic widths resolved).
+    support_contact_distance : float
+        Gap between support and the part, mm.
+    buildplate_only : bool
+        Support only on the build plate, never on the part.
+    filament_diameter : float
+        mm.
+    filament_density : float
+        g/cm3 (:data:`DEFAULT_DENSITY` when the profile says 0).
+    path : str or None
+        The file read, or None for PrusaSlicer's defaults.
+    raw : dict of str -> str
+        Every ``key = value`` of the file.
+    """
+
+    layer_height: float = 0.3
+    first_layer_height: float = 0.35
+    nozzle_diameter: float = 0.4
+    support_threshold: float = 0.0
+    external_perimeter_width: float = 0.45
+    support_contact_distance: float = 0.2
+    buildplate_only: bool = False
+    filament_diameter: float = 1.75
+    filament_density: float = DEFAULT_DENSITY
+    path: str | None = None
+    raw: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def overhang_angle(self) -> float:
+        """The slope under which the slicer supports, degrees from the plate: :func:`overhang_threshold`."""
+        return overhang_threshold(self)
+
+    @property
+    def name(self) -> str:
+        """The file's name, or ``PrusaSlicer defaults``."""
+        return Path(self.path).name if self.path else "PrusaSlicer defaults"
+
+    def summary(self) -> dict:
+        """JSON-ready description for reports."""
+        return {"profile": self.path or "PrusaSlicer defaults", "layer_height": self.layer_height,
+                "support_material_threshold": self.support_threshold,
+                "external_perimeter_width": round(self.external_perimeter_width, 6),
+                "overhang_angle": round(self.overhang_angle, 3),
+                "support_material_buildplate_only": self.buildplate_only,
+                "filament_density": self.filament_density}
+
+
+def overhang_threshold(profile: PrinterProfile) -> float:
+    """The slope under which PrusaSlicer supports a surface with ``profile``.
+
+    Parameters
+    ----------
+    profile : PrinterProfile
+
+    Returns
+    -------
+    angle : float
+        Degrees from the build plate: ``support_threshold + 1`` when it is
+        set, else ``atan(layer_height / (external_perimeter_width / 2))``.
+    """
+    if profile.support_threshold > 0:
+        return min(profile.support_threshold + 1.0, 90.0)
+    return math.degrees(math.atan2(profile.layer_height, profile.external_perimeter_width / 2.0))
+
+
+def default_profile() -> PrinterProfile:
+    """PrusaSlicer's own defaults (automatic threshold, 0.3 mm layers): 53.1 degrees."""
+    return _profile_of({}, None, "PrusaSlicer defaults")
+
+
+def _profile_of(raw: dict, path: str | None, source: str) -> PrinterProfile:
+    nozzle = _number(raw, "nozzle_diameter", source)
+    if nozzle <= 0:
+        raise InputError(source, "nozzle_diameter must be above 0")
+    external = _width(raw, "external_perimeter_extrusion_width", nozzle, source)
+    general = _width(raw, "extrusion_width", nozzle, source)
+    external = external or general or 1.125 * nozzle
+    layer = _number(raw, "layer_height", source)
+    if layer <= 0:
+        raise InputError(source, "layer_height must be above 0")
+    threshold = _number(raw, "support_material_threshold", source)
+    if threshold > 90:
+        raise InputError(source, f"support_material_threshold = {threshold:g} is not within 0..90 degrees")
+    density = _number(raw, "filament_density", source)
+    return PrinterProfile(
+        layer_height=layer, first_layer_height=_number(raw, "first_layer_height", source), nozzle_diameter=nozzle,
+        support_threshold=threshold, external_perimeter_width=external,
+        support_contact_distance=_number(raw, "support_material_contact_distance", source),
+        buildplate_only=raw.get("support_material_buildplate_only", "0").strip() in ("1", "true"),
+        filament_diameter=_number(raw, "filament_diameter", source),
+        filament_density=density or DEFAULT_DENSITY, path=path, raw=dict(raw))
+
+
+def read_printer_profile(path: str | os.PathLike) -> PrinterProfile:
+    """Read a PrusaSlicer config file (``.ini``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    profile : PrinterProfile
+        Keys the file lacks take :data:`PRUSA_DEFAULTS`.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is not a PrusaSlicer config (no
+        ``key = value`` line, binary content), or a value this tool uses is
+        not a number: one line naming the file and the key.
+    """
+    source = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(source, f"cannot read the printer profile ({exc.strerror or exc})") from None
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        text = None
+    if text is None or "\x00" in text:
+        raise InputError(source, "not a PrusaSlicer config (binary content); export one from PrusaSlicer "
+                                 "with File > Export > Export Config")
+    raw = {}
+    for line in text.splitlines():
+        line = line.strip()
+        if not line or line[0] in "#;" or (line.startswith("[") and line.endswith("]")):
+            continue
+        key, sep, value = line.partition("=")
+        if not sep or not key.strip() or " " in key.strip():
+            raise InputError(source, f"not a PrusaSlicer config: the line {line[:60]!r} is not key = value")
+        raw[key.strip()] = value.strip()
+    if not raw:
+        raise InputError(source, "not a PrusaSlicer config: no key = value line; export one from PrusaSlicer "
+                                 "with File > Export > Export Config")
+    return _profile_of(raw, str(Path(path).resolve()), source)
+
+
+def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:
+    """Volume of a length of filament.
+
+    Parameters
+    ----------
+    mm : float
+        Filament length in mm.
+    diameter_mm : float
+        Filament diameter in mm.
+
+    Returns
+    -------
+    cm3 : float
+        ``mm * pi * (diameter_mm / 2)**2 / 1000``.
+    """
+    return mm * math.pi * (diameter_mm / 2.0) ** 2 / 1000.0

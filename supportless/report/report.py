@@ -1,0 +1,379 @@
+"""Reports of a pose: support before and after, distortion, intersections.
+
+:func:`pose_measures` measures one pose (the command line's report and the
+browser app's panel both use it); :func:`build_report` puts the rest pose and
+a search's pose side by side as the JSON report of ``optimize``;
+:func:`write_pictures` draws them.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+import platform
+from pathlib import Path
+
+import numpy as np
+
+from ..base.geometry import place_on_plate, print_transform
+from ..copyleft.cgal import intersecting_face_pairs
+from ..energies.intersection import self_intersection_volume
+from ..energies.overhang import overhang_energy, risky_area, risky_faces
+from ..energies.slicer_model import predicted_support_mm
+from ..energies.support import support_volume
+from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
+from ..files.printframe import DEFAULT_HEIGHT_MM, PrintFrame, rig_print_frame
+from ..search.orientation import print_direction, rotation_axis_angle
+from .render import plot_convergence, render_before_after
+
+__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
+           "support_headline", "write_pictures"]
+
+
+def _support_measures(V, faces, up, angle, resolution) -> dict:
+    return {
+        "support_prism": float(overhang_energy(V, faces, up, angle)),
+        "support_column": float(support_volume(V, faces, up, angle, resolution)),
+        "risky_area": float(risky_area(V, faces, up, angle)),
+    }
+
+
+def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None,
+                  vertices: np.ndarray | None = None, rotation: np.ndarray | None = None) -> dict:
+    """Everything a report says about one pose.
+
+    Parameters
+    ----------
+    objective : supportless.search.objective.Objective
+        The objective the search minimises; its value and terms are reported.
+    angles : (m, 3) float64
+    exact : bool
+        Also count intersecting face pairs exactly (CGAL; slower). 2D meshes
+        report -1.
+    overhang_angle : float, optional
+        Threshold of the support measures (default: the objective's).
+    vertices : (n, d) float64, optional
+        ``objective.rig.pose(angles)`` when the caller has it already.
+    rotation : (d, d) float64, optional
+        The print rotation: the support measures (and the objective) are
+        then those of the print frame, and ``upright`` holds the support
+        measures of the pose as it stands.
+
+    Returns
+    -------
+    measures : dict
+        ``arap`` (raw distortion); the two support estimates ``support_prism``
+        (the paper's overhang energy,
+        :func:`~supportless.energies.overhang.overhang_energy`) and
+        ``support_column`` (:func:`~supportless.energies.support.support_volume`);
+        ``self_intersection_volume``, ``risky_area``, the normalised ``terms``
+        and ``objective``, contact and balance (``new_contact_vertices``,
+        ``stability_margin``, ``stands``, ``centre_of_mass``; see
+        :meth:`supportless.search.standing.Standing.measures`), and
+        ``intersecting_face_pairs`` (when ``exact``). Contact, balance and
+        distortion are always judged as the pose stands.
+    """
+    rig = objective.rig
+    V = rig.pose(angles) if vertices is None else vertices
+    value, terms, raw = objective.evaluate(angles, rotation)
+    angle = objective.overhang_angle if overhang_angle is None else overhang_angle
+    printed = V if rotation is None else V @ np.asarray(rotation, np.float64).T
+    out = {
+        "objective": float(value),
+        "terms": {k: float(v) for k, v in terms.items()},
+        "arap": float(raw["arap"]),
+        "overhang_angle": float(angle),
+        **_support_measures(printed, rig.faces, rig.up, angle, objective.resolution),
+        "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
+    }
+    if rotation is not None:
+        out["upright"] = _support_measures(V, rig.faces, rig.up, angle, objective.resolution)
+    out |= objective.standing.measures(rig.transforms(angles), V)
+    if exact:
+        out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
+    return out
+
+
+def reduction(before: float, after: float) -> float | None:
+    """Percentage reduction ``100 (1 - after / before)``.
+
+    Parameters
+    ----------
+    before, after : float
+        A quantity (support volume, filament length, ...) before and after.
+
+    Returns
+    -------
+    percent : float or None
+        Positive when ``after`` is smaller; None when ``before`` is not positive.
+    """
+    return None if before <= 0 else 100.0 * (1.0 - after / before)
+
+
+#: The printed height the report's predicted slicer filament is for when no print frame is given, mm.
+PREDICTION_HEIGHT_MM = DEFAULT_HEIGHT_MM
+
+
+def predicted_slicer(rig, result, height_mm: float = PREDICTION_HEIGHT_MM) -> dict | None:
+    """PrusaSlicer's support filament for the rest pose and the found pose, as the slicer model predicts it.
+
+    Parameters
+    ----------
+    rig : Rig
+    result : supportless.search.optimizer.PoseResult
+    height_mm : float
+        The rest pose is printed this tall; the found pose at the same scale.
+
+    Returns
+    -------
+    prediction : dict or None
+        ``height_mm``, ``threshold_deg``, ``before_mm``, ``after_mm`` (support
+        filament, mm of 1.75 mm filament) and ``reduction`` (a fraction,
+        rest -> found; None when the rest pose needs none); None for planar rigs.
+    """
+    if rig.dim != 3:
+        return None
+    up = np.asarray(rig.up, np.float64)
+    extent = float(np.ptp(rig.vertices @ up))
+    if not extent > 0:
+        return None
+    scale = float(height_mm) / extent
+    angle = float(result.settings.overhang_angle)
+    before, after = predicted_support_mm(np.stack([place_on_plate(rig.vertices, up), result.print_vertices]),
+                                         rig.faces, up, angle, scale)
+    return {"height_mm": float(height_mm), "threshold_deg": angle, "before_mm": float(before),
+            "after_mm": float(after), "reduction": None if before <= 0 else float(1.0 - after / before)}
+
+
+def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
+    """The JSON report of a pose search: the rest pose and the found pose side by side.
+
+    Parameters
+    ----------
+    rig : Rig
+    result : supportless.search.optimizer.PoseResult
+    frame : PrintFrame, optional
+        How the files are printed (default: :func:`~supportless.files.printframe.rig_print_frame`,
+        the rest pose 60 mm tall): the predicted slicer figures are for its height.
+
+    Returns
+    -------
+    report : dict
+        Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
+        printer's threshold ``result.settings.overhang_angle``), their
+        ``reduction_percent``, ``predicted_slicer`` (:func:`predicted_slicer`:
+        the support filament PrusaSlicer is predicted to lay down at the
+        frame's height) and its ``predicted_slicer_reduction`` (a fraction),
+        ``support`` (:func:`support_headline`: the one support figure a user
+        reads), ``print_frame`` (the files' frame and scale), the ``print_rotation`` and which ``frames``
+        the figures are in, the largest and RMS vertex displacement, each
+        bone's rotation (one angle, degrees) and the largest, the Euler
+        angles, runtime, settings and convergence history; ``choice``
+        (:meth:`supportless.search.choice.Choice.to_dict`: every answer weighed, its
+        kind, predicted and sliced support, and who chose which and why), or
+        None when the search's own best was returned unweighed.
+
+        ``before`` is the rest pose as it stands; ``after`` is the found
+        pose in its print orientation (support counted there), with
+        ``after["upright"]`` the support of the same pose as it stands.
+    """
+    objective, angle = result.objective, result.settings.overhang_angle
+    R = np.asarray(result.rotation, np.float64)
+    before = pose_measures(objective, rig.rest_angles(), overhang_angle=angle)
+    after = pose_measures(objective, result.angles, overhang_angle=angle, rotation=R)
+    axis, degrees = rotation_axis_angle(R)
+    displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
+    height = float(np.ptp(rig.vertices @ rig.up))
+    turned = np.degrees(objective.prior.angles(result.angles))
+    frame = rig_print_frame(rig) if frame is None else frame
+    predicted = predicted_slicer(rig, result, frame.height_mm)
+    report = {
+        "model": rig.name,
+        "vertices": int(len(rig.vertices)),
+        "faces": int(len(rig.faces)),
+        "bones": int(rig.bone_count),
+        "dimension": int(rig.dim),
+        "up": rig.up.tolist(),
+        "before": before,
+        "after": after,
+        "reduction_percent": {
+            "support_prism": reduction(before["support_prism"], after["support_prism"]),
+            "support_column": reduction(before["support_column"], after["support_column"]),
+            "risky_area": reduction(before["risky_area"], after["risky_area"]),
+        },
+        "predicted_slicer": predicted,
+        "predicted_slicer_reduction": None if predicted is None else predicted["reduction"],
+        "print_frame": frame.to_dict(),
+        "print_rotation": {
+            "orient": result.settings.orient,
+            "matrix": R.round(12).tolist(),
+            "axis": None if axis is None else axis.round(12).tolist(),
+            "angle_deg": round(degrees, 6),
+            "printing_direction_in_model_frame": print_direction(R, rig.up).round(12).tolist(),
+        },
+        "frames": {
+            "before": "rest pose, standing as the input stood (the display frame)",
+            "after": "found pose turned by print_rotation, lowest point on the plate (the print frame): "
+                     "the mesh to slice; its contact, balance and distortion are judged standing",
+            "after.upright": "found pose standing as the input stood (the display frame)",
+        },
+        "max_vertex_displacement": float(displacement.max()),
+        "max_vertex_displacement_relative_to_height": float(displacement.max() / height) if height else None,
+        "rms_vertex_displacement_relative_to_height": float(np.sqrt(np.mean(displacement ** 2)) / height)
+        if height else None,
+        "bone_rotation_deg": [round(float(a), 4) for a in turned],
+        "largest_rotation_deg": float(turned.max()),
+        "angles_deg": np.degrees(result.angles).round(4).tolist(),
+        "runtime_seconds": float(result.runtime_seconds),
+        "choice": None if result.choice is None else result.choice.to_dict(),
+        "interrupted": bool(result.interrupted),
+        "settings": result.settings.to_dict() | {"fixed_bones": [int(b) + 1 for b in np.flatnonzero(result.fixed)]},
+        "history": [float(v) for v in result.history],
+        "term_history": {k: [float(x) for x in v] for k, v in result.term_history.items()},
+        "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
+    }
+    report["support"] = support_headline(report)
+    return report
+
+
+def support_headline(report: dict) -> dict | None:
+    """The one support figure a user compares with their slicer, rest pose -> found pose.
+
+    PrusaSlicer's figures when the report has them (``slice_check``), else the
+    slicer model's prediction (``predicted_slicer``), labelled as such.
+
+    Parameters
+    ----------
+    report : dict
+        A :func:`build_report` report, with ``slice_check`` when a slicer ran.
+
+    Returns
+    -------
+    headline : dict or None
+        ``source`` ("PrusaSlicer" or "predicted"), ``height_mm``,
+        ``before_mm``/``after_mm`` (filament), ``before_g``/``after_g``,
+        ``before_time_s``/``after_time_s`` (printing time the supports add;
+        None without a slicer), ``reduction_percent`` and ``line`` (the
+        summary's text); None for a planar figure.
+    """
+    sliced, predicted = report.get("slice_check"), report.get("predicted_slicer")
+    if sliced:
+        b, a = sliced["before"], sliced["after"]
+        out = {"source": "PrusaSlicer", "height_mm": sliced["height_mm"], "before_mm": b["support_mm"],
+               "after_mm": a["support_mm"], "before_g": b.get("support_g"), "after_g": a.get("support_g"),
+               "before_time_s": b.get("support_time_s"), "after_time_s": a.get("support_time_s")}
+    elif predicted:
+        grams = [mm_to_cm3(predicted[k], FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY for k in ("before_mm", "after_mm")]
+        out = {"source": "predicted", "height_mm": predicted["height_mm"], "before_mm": predicted["before_mm"],
+               "after_mm": predicted["after_mm"], "before_g": grams[0], "after_g": grams[1],
+               "before_time_s": None, "after_time_s": None}
+    else:
+        return None
+    out["reduction_percent"] = reduction(out["before_mm"], out["after_mm"])
+    out["line"] = _headline_text(out)
+    return out
+
+
+def _headline_text(h: dict) -> str:
+    def side(g, mm, t, first):
+        text = f"{g:.1f} g" if g is not None else "? g"
+        text += f" ({mm:,.0f} mm of filament)" if first else f" ({mm:,.0f} mm)"
+        return text + (f", {duration_text(t)} of printing" if t is not None else "")
+
+    red = h["reduction_percent"]
+    change = ("no support before" if red is None else f"{red:.0f} % less" if red >= 0 else f"{-red:.0f} % more")
+    source = ("PrusaSlicer" if h["source"] == "PrusaSlicer"
+              else "predicted for PrusaSlicer, an estimate (--slice-check measures it)")
+    return (f"support {side(h['before_g'], h['before_mm'], h['before_time_s'], True)} -> "
+            f"{side(h['after_g'], h['after_mm'], h['after_time_s'], False)}: {change} "
+            f"({source}; printed {h['height_mm']:.4g} mm tall)")
+
+
+def duration_text(seconds: float) -> str:
+    """``1 h 02 min`` / ``12 min`` / ``40 s`` of a (signed) duration, shown as its size."""
+    seconds = abs(float(seconds))
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60):02d} min"
+    return f"{int(round(seconds / 60))} min" if seconds >= 60 else f"{seconds:.0f} s"
+
+
+def _cpu_count() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def write_pictures(folder, rig, result, report: dict | None = None) -> list[tuple[str, str]]:
+    """Before/after renders (same camera, risky faces red, skeleton, balance), the print orientation, convergence.
+
+    ``before_after.png`` shows the rest pose and the found pose standing as
+    the input stood; ``print.png`` (when the search turned the model) shows
+    the found pose standing beside the same pose in its print orientation on
+    the plate, risky faces counted in each frame.
+
+    Risky faces are those past the printer's threshold
+    (``result.settings.overhang_angle``), as the report counts them.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+    rig : Rig
+    result : supportless.search.optimizer.PoseResult
+    report : dict, optional
+        Its :func:`build_report`, for the reduction in the title.
+
+    Returns
+    -------
+    written : list of (label, path)
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    angle = result.settings.overhang_angle
+    rest = place_on_plate(rig.vertices, rig.up)
+    posed = result.vertices
+    shift_rest = rest[0] - rig.vertices[0]
+    shift_posed = posed[0] - rig.pose(result.angles)[0]
+    joints_rest = rig.joints + shift_rest
+    joints_posed = rig.posed_joints(result.angles) + shift_posed
+    risky = rig.dim == 3
+    change = (report or {}).get("reduction_percent", {}).get("support_prism")
+    standing = result.objective.standing
+    corners = standing.support_corners()
+
+    def balance(angles, shift):
+        return {"centre_of_mass": standing.centre_of_mass(rig.transforms(angles)) + shift,
+                "support": corners + shift}
+
+    before_after = render_before_after(
+        folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
+        before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
+        before_risky=risky_faces(rest, rig.faces, rig.up, angle) if risky else None,
+        after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
+        titles=("rest pose", "found pose"),
+        before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
+        suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:.3g} deg); "
+                 "green = support polygon, ring = centre of mass")
+    written = [("before/after picture", str(before_after))]
+    R = np.asarray(result.rotation, np.float64)
+    if not np.allclose(R, np.eye(rig.dim)):
+        printed = np.asarray(result.print_vertices, np.float64)
+        shift = print_transform(posed, R, rig.up)
+        axis, degrees = rotation_axis_angle(R)
+        direction = np.round(print_direction(R, rig.up), 2).tolist()
+        printed_change = (report or {}).get("reduction_percent", {}).get("support_prism")
+        written.append(("print orientation picture", str(render_before_after(
+            folder / "print.png", (posed, rig.faces), (printed, rig.faces), rig.up,
+            before_skeleton=(joints_posed, rig.bones), after_skeleton=(joints_posed @ R.T + shift, rig.bones),
+            before_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
+            after_risky=risky_faces(printed, rig.faces, rig.up, angle) if risky else None,
+            titles=("found pose, standing", f"as printed: turned {degrees:.0f} deg, model {direction} up"),
+            before_balance=balance(result.angles, shift_posed),
+            suptitle=f"{rig.name}: print orientation; support (prism) against the rest pose standing: "
+                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:.3g} deg)"))))
+    terms = {k: v for k, v in result.term_history.items() if len(v)}
+    convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
+                                   title=f"{rig.name}: best objective per iteration")
+    return written + [("convergence plot", str(convergence))]
+
+
+def _fmt_pct(x) -> str:
+    return "n/a" if x is None else f"{x:.0f} % less"

@@ -1,0 +1,8 @@
+"""The rig: surface, skeleton, tetrahedra and skinning weights, prepared once and cached.
+
+* :mod:`.rig`: :class:`~supportless.rig.rig.Rig` (posing, self-intersection), :func:`prepare_rig`
+  and :func:`load_rig`;
+* :mod:`.tetmesh`: volume meshes (TetGen, else fTetWild; Triangle in 2D);
+* :mod:`.weights`: bounded biharmonic weights; :mod:`.cache`: the on-disk cache shared by runs;
+* :mod:`.balance`: centre of mass, support polygon and stability of a posed body.
+"""

@@ -1,0 +1,331 @@
+"""The answer a user gets: the search's best against the simpler answers it met, judged by predicted support.
+
+The default search turns the model as well as posing it, and its objective
+(the prism estimate) ranks turned poses differently from a slicer: on some
+models the best pose printed as it stands, or the rest pose turned, needs
+less support in PrusaSlicer than the search's own best. :func:`choose` keeps
+a few distinct answers of each kind (:data:`KINDS`), predicts each one's
+support filament with the slicer model (:mod:`supportless.energies.slicer_model`)
+and returns the one with the least; when another is within
+:data:`PREDICTION_TOLERANCE` of that least support (inside the model's error)
+and better by the search's objective, that one. With PrusaSlicer installed the
+final choice among the best of them is the slicer's
+(:func:`supportless.slicing.ranking.slice_choice`): that is what makes the difference.
+On 29 models the model's choice alone is about as good as the search's own
+best (54.1 % against 54.5 % less support on average), PrusaSlicer's 55.5 %,
+never worse than the search's best (benchmarks/RESULTS.md, "Pose and
+orientation"): the model is off by 30 % and more on some game characters.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..base.geometry import place_on_plate
+from ..energies.slicer_model import predicted_support_mm
+from ..files.printframe import DEFAULT_HEIGHT_MM
+from ..rig.rig import Rig
+from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
+from .result import PoseResult, measured_at
+
+__all__ = ["CHECKS_PER_KIND", "KINDS", "PER_KIND", "PREDICTION_TOLERANCE", "Candidate", "Choice", "candidate_answers", "choose", "pool_of", "print_distance_deg",
+           "choose_by_model"]
+
+#: The kinds of answer, the search's own first: ``"pose and turn"`` (the
+#: search's best and its other good poses), ``"pose"`` (the pose phase's,
+#: printed as the model stands) and ``"turn"`` (the start pose, upright or
+#: turned to a candidate printing direction).
+KINDS = ("pose and turn", "pose", "turn")
+
+#: Distinct good answers kept of each kind (:func:`supportless.search.candidates.distinct_candidates`).
+PER_KIND = 2
+
+#: Candidates whose predicted support is within this share of the rest pose's
+#: predicted support of the least are a tie for the slicer model (it is within
+#: 7 points of PrusaSlicer's reduction, benchmarks/RESULTS.md, "The slicer
+#: model"): among them the search's objective decides.
+PREDICTION_TOLERANCE = 0.02
+
+#: Exact self-intersection checks (CGAL) of alternatives per kind at most: a model whose every pose
+#: crosses itself (its rest pose does) would otherwise have each of the swarm's good poses checked.
+CHECKS_PER_KIND = 6
+
+#: Two answers closer than this (degrees, :func:`pose_distance_deg`) are one.
+SAME_DEGREES = 0.5
+
+
+@dataclass
+class Candidate:
+    """One answer the choice weighs.
+
+    Attributes
+    ----------
+    kind : str
+        One of :data:`KINDS`.
+    result : PoseResult
+        The answer measured with the search's objective (``value``, ``terms``,
+        ``print_vertices``).
+    predicted_mm : float
+        The slicer model's support filament at ``Choice.height_mm``, mm.
+    sliced_mm : float or None
+        PrusaSlicer's support filament, mm, once sliced.
+    same_as : int or None
+        The earlier answer (of another kind) this one prints like (within
+        :data:`SAME_DEGREES`, :func:`print_distance_deg`), e.g. the pose
+        phase's best when the search kept it upright.
+    """
+
+    kind: str
+    result: PoseResult
+    predicted_mm: float
+    sliced_mm: float | None = None
+    same_as: int | None = None
+
+
+@dataclass
+class Choice:
+    """How :func:`choose` (and the slicer, :func:`supportless.slicing.ranking.slice_choice`) chose the answer.
+
+    Attributes
+    ----------
+    candidates : list of Candidate
+        In :data:`KINDS` order, best by the objective first within a kind.
+    chosen : int
+        The answer's position in ``candidates``.
+    by : {"model", "slicer"}
+        Who made the final choice.
+    reason : str
+        Why, in a sentence.
+    rest_mm : float
+        The rest pose's predicted support filament, as it stands, mm.
+    height_mm : float
+        The printed height of the rest pose the predictions are for, mm.
+    sliced_seconds : float
+        Wall time spent slicing (0 when the model chose).
+    slicer_height_mm : float or None
+        The printed height the slices were made at.
+    up : (3,) float64
+        The rig's up direction (a candidate's ``up`` in the report is the
+        model's direction that prints upward).
+    model_chosen : int
+        The slicer model's choice (``chosen`` until a slicer chooses).
+    """
+
+    candidates: list[Candidate]
+    chosen: int
+    by: str
+    reason: str
+    rest_mm: float
+    height_mm: float
+    sliced_seconds: float = 0.0
+    slicer_height_mm: float | None = None
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
+    model_chosen: int = -1
+
+    def __post_init__(self):
+        if self.model_chosen < 0:
+            self.model_chosen = self.chosen
+
+    def to_dict(self) -> dict:
+        """The candidates and the choice as JSON values (for the report)."""
+        chosen = self.candidates[self.chosen].result
+        return {
+            "by": self.by, "reason": self.reason, "chosen": self.chosen + 1,
+            "predicted_height_mm": self.height_mm, "rest_predicted_mm": round(self.rest_mm, 1),
+            "sliced_seconds": round(self.sliced_seconds, 3), "sliced_height_mm": self.slicer_height_mm,
+            "candidates": [{
+                "number": i + 1, "kind": c.kind, "value": float(c.result.value),
+                "terms": {k: float(v) for k, v in c.result.terms.items()},
+                "predicted_mm": round(c.predicted_mm, 1),
+                "sliced_mm": None if c.sliced_mm is None else round(c.sliced_mm, 1),
+                "turned": bool(not np.allclose(c.result.rotation, np.eye(len(c.result.rotation)))),
+                "up": np.round(c.result.rotation.T @ self.up, 3).tolist(),
+                "same_as": None if c.same_as is None else c.same_as + 1,
+                "distance_deg": round(pose_distance_deg(c.result.angles, c.result.rotation, chosen.angles,
+                                                        chosen.rotation), 1),
+                "chosen": i == self.chosen, "model_choice": i == self.model_chosen,
+            } for i, c in enumerate(self.candidates)],
+        }
+
+
+def print_distance_deg(angles_a: np.ndarray, rotation_a: np.ndarray, angles_b: np.ndarray, rotation_b: np.ndarray,
+                       up: np.ndarray) -> float:
+    """How far apart two answers print: :func:`pose_distance_deg` with a turn about the vertical left out.
+
+    Parameters
+    ----------
+    angles_a, angles_b : (m, 3) float64
+    rotation_a, rotation_b : (3, 3) float64
+    up : (3,) float64
+
+    Returns
+    -------
+    degrees : float
+        The largest of the bones' rotations between the poses and the angle
+        between the two directions that print upward (``R^T up``): two
+        answers turned alike but for a spin on the plate are one print.
+    """
+    bones = pose_distance_deg(angles_a, np.eye(3), angles_b, np.eye(3))
+    u = np.asarray(rotation_a, np.float64).T @ up
+    v = np.asarray(rotation_b, np.float64).T @ up
+    tilt = np.degrees(np.arccos(np.clip(u @ v / (np.linalg.norm(u) * np.linalg.norm(v)), -1.0, 1.0)))
+    return float(max(bones, tilt))
+
+
+def pool_of(result: PoseResult, kind: str) -> dict:
+    """The poses of one kind of :data:`KINDS`, best first, as :attr:`PoseResult.candidates`.
+
+    ``"pose and turn"``: ``result`` itself, then its ``candidates``; the other
+    kinds: its ``alternatives``.
+    """
+    if kind == "pose and turn":
+        cand = result.candidates or {}
+        head = {"angles": result.angles[None], "rotations": result.rotation[None], "values": np.array([result.value])}
+        if not len(cand.get("values", ())):
+            return head
+        if np.allclose(cand["angles"][0], result.angles) and np.allclose(cand["rotations"][0], result.rotation):
+            return cand
+        return {key: np.concatenate([head[key], cand[key]]) for key in head}
+    return result.alternatives.get(kind) or {}
+
+
+def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
+                      height_mm: float = DEFAULT_HEIGHT_MM) -> tuple[list[Candidate], float]:
+    """The distinct answers of each kind, measured with the objective and the slicer model.
+
+    Parameters
+    ----------
+    rig : Rig
+        3D.
+    result : PoseResult
+        The search's result, with its ``candidates`` and ``alternatives``.
+    per_kind : int
+        Distinct answers kept of each kind at most (:func:`distinct_candidates`,
+        self-intersecting ones left out, at most :data:`CHECKS_PER_KIND` asked).
+        Of the turns of the start pose (never left out for crossing itself: it
+        crosses itself as the start pose does) the ``per_kind`` with the least
+        predicted support are kept, and the one the search's objective likes best.
+    height_mm : float
+        The rest pose is printed this tall; the predictions are at this scale.
+
+    Returns
+    -------
+    candidates : list of Candidate
+        :data:`KINDS` in order, the search's result first; a copy of an
+        answer of the same kind is left out, of another kind marked ``same_as``.
+    rest_mm : float
+        Predicted support of the rest pose as it stands, mm.
+    """
+    picked: list[tuple[str, PoseResult, int | None]] = []  # (kind, answer, the answer it copies)
+    for kind in KINDS:
+        checks = {"left": CHECKS_PER_KIND}
+
+        def clear(angles, _rotation, checks=checks):
+            checks["left"] -= 1  # where every pose crosses itself (so does the rest pose) stop asking soon
+            return checks["left"] >= 0 and not rig.self_intersects(angles)
+
+        label = kind if kind != "pose and turn" or result.settings.orient == "free" else "pose"
+        pool = pool_of(result, kind)
+        if not len(pool.get("values", ())):
+            continue
+        # one pose turned: every direction (the least predicted support is kept below); else the best (checked
+        # by the search) and other good poses clear of self-intersection
+        keep = range(len(pool["values"])) if kind == "turn" else \
+            distinct_candidates(pool, per_kind, DISTINCT_DEGREES, CANDIDATE_TOLERANCE, accept=clear)
+        for i in keep:
+            a, q = pool["angles"][i], pool["rotations"][i]
+            same = [j for j, (_, r, _) in enumerate(picked)
+                    if print_distance_deg(a, q, r.angles, r.rotation, rig.up) < SAME_DEGREES]
+            if any(picked[j][0] == label for j in same):  # a copy within its kind (a spin on the plate) adds nothing
+                continue
+            picked.append((label, result if (kind == "pose and turn" and i == 0) else measured_at(rig, result, a, q),
+                           same[0] if same else None))
+    up = np.asarray(rig.up, np.float64)
+    scale = float(height_mm) / float(np.ptp(rig.vertices @ up))
+    V = np.stack([place_on_plate(rig.vertices, up)] + [r.print_vertices for _, r, _ in picked])
+    predicted = predicted_support_mm(V, rig.faces, up, float(result.settings.overhang_angle), scale)
+    candidates = [Candidate(kind, r, float(p), same_as=j) for (kind, r, j), p in zip(picked, predicted[1:])]
+    # the turns with the least predicted support, and the one the search's objective likes best (the first)
+    turns = [c for c in candidates if c.kind == "turn"]
+    kept_turns = {id(c) for c in sorted(turns, key=lambda c: c.predicted_mm)[:per_kind]} | {id(c) for c in turns[:1]}
+    dropped = {id(c) for c in turns if id(c) not in kept_turns}
+    kept = [c for c in candidates if id(c) not in dropped]
+    position = {id(c): i for i, c in enumerate(kept)}
+    for c in kept:  # same_as pointed into the list before the extra turns were dropped
+        if c.same_as is not None:
+            c.same_as = position.get(id(candidates[c.same_as]))
+    return kept, float(predicted[0])
+
+
+def choose_by_model(predicted_mm: np.ndarray, values: np.ndarray, rest_mm: float,
+                    tolerance: float = PREDICTION_TOLERANCE) -> tuple[int, str]:
+    """The slicer model's choice among answers.
+
+    Parameters
+    ----------
+    predicted_mm : (c,) float64
+        Predicted support filament of each answer.
+    values : (c,) float64
+        Their objective values.
+    rest_mm : float
+        The rest pose's predicted support (the scale of the tolerance).
+    tolerance : float
+        Answers within ``tolerance * rest_mm`` of the least predicted support
+        tie; the least objective value among them is chosen.
+
+    Returns
+    -------
+    index : int
+    reason : str
+    """
+    predicted_mm, values = np.asarray(predicted_mm, np.float64), np.asarray(values, np.float64)
+    least = int(np.argmin(predicted_mm))
+    window = float(tolerance) * max(float(rest_mm), 0.0)
+    ties = np.flatnonzero(predicted_mm <= predicted_mm[least] + window)
+    best = int(ties[np.argmin(values[ties])])
+    if best == least:
+        return least, f"least predicted support ({predicted_mm[least]:.0f} mm)"
+    return best, (f"predicted support {predicted_mm[best]:.0f} mm, within {100 * tolerance:g} % of the rest pose's "
+                  f"of the least ({predicted_mm[least]:.0f} mm), and a lower objective")
+
+
+def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: float = PREDICTION_TOLERANCE,
+           height_mm: float = DEFAULT_HEIGHT_MM) -> PoseResult:
+    """The answer with the least predicted support among the search's best and the simpler answers.
+
+    Parameters
+    ----------
+    rig : Rig
+        3D, full resolution.
+    result : PoseResult
+        The search's result with its ``alternatives`` (``orient="free"``).
+    per_kind, height_mm
+        As :func:`candidate_answers`.
+    tolerance : float
+        As :func:`choose_by_model`.
+
+    Returns
+    -------
+    chosen : PoseResult
+        One of the candidates, with :attr:`PoseResult.choice` saying how it
+        was chosen; the search's history, stats and time are kept.
+    """
+    t0 = time.perf_counter()
+    candidates, rest_mm = candidate_answers(rig, result, per_kind, height_mm)
+    index, reason = choose_by_model(np.array([c.predicted_mm for c in candidates]),
+                                    np.array([c.result.value for c in candidates]), rest_mm, tolerance)
+    choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64))
+    chosen = with_choice(candidates[index].result, choice)
+    seconds = time.perf_counter() - t0
+    return dataclasses.replace(chosen, runtime_seconds=result.runtime_seconds + seconds,
+                               stats=dict(chosen.stats, choice_seconds=seconds))
+
+
+def with_choice(result: PoseResult, choice: Choice) -> PoseResult:
+    """``result`` carrying ``choice`` (and a ``chosen_kind`` stat)."""
+    kind = choice.candidates[choice.chosen].kind
+    return dataclasses.replace(result, choice=choice, stats=dict(result.stats, chosen_kind=kind))

@@ -1,0 +1,419 @@
+"""What the pose search minimises: a weighted, normalised sum of energies, and hard rules.
+
+``E = w_arap * E_arap / vol + w_overhang * E_overhang / S_rest + w_intersect * E_intersect / vol
++ w_prior * E_prior``, plus ``INFEASIBLE + violation`` for a pose that breaks a hard rule.
+
+* ``vol`` is the rest volume of the model (area in 2D). ``E_arap`` and
+  ``E_intersect`` scale like a volume (s³ in 3D, s² in 2D), so dividing by
+  ``vol`` makes them dimensionless: the ARAP term becomes a mean squared strain,
+  the intersection term the fraction of the body that overlaps itself.
+* ``S_rest`` is the overhang (support) estimate of the rest pose, floored at
+  ``1e-3 * vol`` so an already printable model does not divide by zero. The
+  overhang term is then 1.0 at the rest pose and 0.6 for a pose needing 40 %
+  less support.
+
+* ``E_prior`` is the natural-pose prior (:mod:`supportless.search.prior`): squared
+  joint angles weighted by the share of the body each joint turns.
+* The hard rules: every joint within its limit (one angle), and the pose
+  stands as the rest pose stood (:mod:`supportless.search.standing`). ``violation``
+  measures how far a pose breaks them (0 when it keeps them).
+
+All normalised terms are invariant to the model's scale and units, so the
+same default weights work for a 6 cm and a 6 m model and for planar figures.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from ..base.geometry import signed_volume
+from ..base.kinematics import lbs_operator, pruned_weights, skin
+from ..energies import arap as arap_mod
+from ..energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
+from ..energies.overhang import overhang_energy
+from ..energies.slicer_model import predicted_support_mm
+from ..energies.support import support_volume
+from ..rig.rig import Rig
+from .prior import PosePrior
+from .standing import Standing
+
+__all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT",
+           "W_OVERHANG", "W_PRIOR"]
+
+#: Default weights of the normalised terms (see the module docstring).
+W_ARAP = 2.0
+W_OVERHANG = 1.0
+W_INTERSECT = 50.0
+W_PRIOR = 0.3
+
+#: Added to the value of a pose that breaks a hard rule (joint limit, standing):
+#: larger than any pose that keeps them can cost.
+INFEASIBLE = 1e3
+
+OVERHANG_MODELS = ("prism", "column", "slicer")
+
+#: The search's skinning drops weights below this (:func:`supportless.base.kinematics.pruned_weights`,
+#: :meth:`Objective.bounded` only): on the zoo, the bunny and a 68-bone character, random poses within 40° then
+#: move no vertex by more than 0.012 % of the model's height; the search's skinning took 1.5x (bunny) to 4.6x
+#: (68-bone character) less time.
+SEARCH_WEIGHT_FLOOR = 1e-4
+
+#: :meth:`Objective.bounded` measures larger batches in chunks of this many poses: the default swarm (200)
+#: in one; a swarm of 5000 on the bunny peaks at 298 MB instead of 1059 MB (``benchmarks/memory.py``).
+POSE_CHUNK = 256
+
+#: Printed height (mm) at which the ``slicer`` overhang model measures a pose (as the report does).
+SLICER_MODEL_HEIGHT_MM = 60.0
+
+
+def distortion(terms: dict, w_arap: float, w_prior: float):
+    """The distortion part of an objective: ``w_arap * arap + w_prior * prior``.
+
+    Parameters
+    ----------
+    terms : dict
+        Normalised terms (:meth:`Objective.terms`), ``"arap"`` and ``"prior"``
+        each a float or ``(P,) float64``.
+    w_arap, w_prior : float
+        Their weights.
+
+    Returns
+    -------
+    distortion : float or (P,) float64
+    """
+    return w_arap * terms["arap"] + w_prior * terms["prior"]
+
+
+class Objective:
+    """Weighted sum of the normalised ARAP, overhang and self-intersection energies.
+
+    Parameters
+    ----------
+    rig : Rig
+    w_arap, w_overhang, w_intersect : float
+        Weights of the normalised terms.
+    overhang_angle : float
+        Threshold slope in degrees from the build plate (45 = the usual slicer
+        default).
+    overhang_model : {"prism", "column", "slicer"}
+        ``prism``: the paper's per-face prism estimate. ``column``: support
+        columns cast down to the plate or the body below
+        (:func:`supportless.energies.support.support_volume`). ``slicer``:
+        PrusaSlicer's support filament as the fitted slicer model predicts it
+        at 60 mm tall (:mod:`supportless.energies.slicer_model`; 3D only).
+    clusters : int or None
+        Rotation clusters of the reduced ARAP energy (None = one per element).
+    resolution : int
+        Ray-grid resolution of the intersection (and column) estimate.
+    backend : {"fast", "numpy"}
+        ``fast``: numba kernels, parallel over poses; ``numpy``: the plain
+        numpy implementations of the energies (slow; the reference).
+    arap_data : supportless.energies.arap.ArapData, optional
+        Precomputed reduced ARAP operators of this rig (with these
+        ``clusters``), to share between objectives; computed on first use
+        otherwise.
+    w_prior : float
+        Weight of the natural-pose prior (:meth:`supportless.search.prior.PosePrior.cost`).
+    joint_limits : float or (m,) float64
+        Largest rotation of each joint, degrees (one angle, see
+        :mod:`supportless.search.prior`); a pose past a limit does not count.
+    keep_standing : bool
+        A pose that touches the plate with a new part or falls over does not
+        count (:class:`supportless.search.standing.Standing`).
+    support_floor : float
+        Fixed cost of support however low it is, as a height added to every
+        prism, in units of the model's rest height (the ``prism`` model).
+    volume : float, optional
+        The volume the distortion and intersection terms are divided by
+        (default: the rig's rest volume). A simplified proxy of a dense
+        surface is given the full surface's, so its terms are those of the
+        model it stands for (:meth:`supportless.rig.rig.Rig.coarse_rig`).
+
+    Poses that break a hard rule (a joint limit, or standing) get the value
+    ``INFEASIBLE + violation``: worse than any pose that keeps the rules, and
+    ranked by how far they break them.
+    """
+
+    def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
+                 w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
+                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
+                 backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
+                 joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
+                 volume: float | None = None):
+        if overhang_model not in OVERHANG_MODELS:
+            raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
+        self.rig = rig
+        self.w_arap = float(w_arap)
+        self.w_overhang = float(w_overhang)
+        self.w_intersect = float(w_intersect)
+        self.overhang_angle = float(overhang_angle)
+        self.overhang_model = overhang_model
+        self.clusters = clusters
+        self.resolution = int(resolution)
+        if backend not in ("fast", "numpy"):
+            raise ValueError(f"backend must be 'fast' or 'numpy', not {backend!r}")
+        self.backend = backend
+        if arap_data is not None:
+            self.__dict__["arap_data"] = arap_data  # fills the cached property below
+        self.w_prior = float(w_prior)
+        self.keep_standing = bool(keep_standing)
+        self.support_floor = float(support_floor)
+        if volume is not None:
+            self.__dict__["volume"] = float(volume)  # fills the cached property below
+        self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
+
+    # ------------------------------------------------------------ precompute
+    @cached_property
+    def arap_data(self) -> arap_mod.ArapData:
+        """Reduced ARAP operators of the rig (computed once)."""
+        return arap_mod.arap_precompute(self.rig.tet_vertices, self.rig.tets, self.rig.tet_weights,
+                                        clusters=self.clusters, rng=np.random.default_rng(0))
+
+    @cached_property
+    def standing(self) -> Standing:
+        """Contact and balance against the rest pose."""
+        return Standing(self.rig)
+
+    @cached_property
+    def volume(self) -> float:
+        """Rest volume of the model (area in 2D)."""
+        return abs(signed_volume(self.rig.vertices, self.rig.faces))
+
+    @cached_property
+    def rest_overhang(self) -> float:
+        """Overhang estimate of the rest pose (the chosen model)."""
+        return float(self.overhang(self.rig.vertices))
+
+    @cached_property
+    def overhang_scale(self) -> float:
+        """Denominator of the overhang term: the rest value, floored at 1e-3 of the volume."""
+        return max(self.rest_overhang, 1e-3 * self.volume)
+
+    # --------------------------------------------------------------- energies
+    def overhang(self, vertices: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
+        """Raw overhang estimate of posed vertices, (P,) or float.
+
+        ``rotations`` ((P, d, d) or (d, d) float64, optional) are the print
+        rotations: support is counted on ``vertices @ R.T`` (the print frame,
+        :mod:`supportless.search.orientation`); none = printed as the model stands.
+        """
+        if rotations is not None:
+            vertices = np.matmul(vertices, np.swapaxes(rotations, -1, -2))
+        if self.overhang_model == "slicer":
+            return predicted_support_mm(vertices, self.rig.faces, self.rig.up, self.overhang_angle,
+                                        SLICER_MODEL_HEIGHT_MM / self.height)
+        if self.overhang_model == "column":
+            return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
+                                  backend=self.backend)
+        # the rig's surface is outward oriented and skinning and turning keep it so: no need to measure it
+        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend,
+                               floor=self.support_floor * self.height, orient=1.0)
+
+    @cached_property
+    def height(self) -> float:
+        """Rest height of the model along up."""
+        return float(np.ptp(self.rig.vertices @ self.rig.up))
+
+    @cached_property
+    def search_lbs(self):
+        """The skinning operator of :meth:`bounded`: the rig's, weights below :data:`SEARCH_WEIGHT_FLOOR` dropped."""
+        return lbs_operator(self.rig.vertices, pruned_weights(self.rig.weights, SEARCH_WEIGHT_FLOOR))
+
+    def _posed(self, angles: np.ndarray, search: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Bone transforms (P, m, d, d+1) and posed surface vertices (P, n, d) of a batch."""
+        transforms = self.rig.transforms(angles)
+        return transforms, skin(self.search_lbs if search else self.rig.lbs, transforms)
+
+    def _intersection(self, vertices: np.ndarray) -> np.ndarray:
+        return self_intersection_volume(vertices, self.rig.faces, self.rig.up, self.resolution, backend=self.backend)
+
+    def raw_terms(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """The three energies before normalisation.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+        rotations : (P, d, d) or (d, d) float64, optional
+            Print rotations: the overhang is counted in the print frame
+            (everything else is judged as the model stands).
+
+        Returns
+        -------
+        terms : dict of str -> (P,) float64 (floats for a single pose)
+            ``arap`` (volume units), ``overhang`` and ``intersection`` (volumes),
+            ``prior`` (dimensionless) and ``violation`` (0 for a pose that
+            keeps the hard rules).
+        """
+        transforms, V = self._posed(angles)
+        return self._cheap_terms(angles, transforms, V, rotations) | {"intersection": self._intersection(V)}
+
+    def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
+        """Every raw term but the (expensive) intersection."""
+        violation = self.prior.excess(angles)
+        if self.keep_standing:
+            violation = violation + self.standing.violation(transforms, V)
+        return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
+                "overhang": self.overhang(V, rotations), "prior": self.prior.cost(angles), "violation": violation}
+
+    def normalise(self, raw: dict) -> dict:
+        """Raw terms -> normalised terms (see the module docstring)."""
+        return {
+            "arap": np.asarray(raw["arap"]) / self.volume,
+            "overhang": np.asarray(raw["overhang"]) / self.overhang_scale,
+            "intersection": np.asarray(raw["intersection"]) / self.volume,
+            "prior": np.asarray(raw["prior"]),
+            "violation": np.asarray(raw["violation"]),
+        }
+
+    def distortion(self, terms: dict):
+        """The distortion part of this objective's ``terms`` (:func:`distortion` at its weights)."""
+        return distortion(terms, self.w_arap, self.w_prior)
+
+    def combine(self, terms: dict) -> np.ndarray:
+        """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""
+        value = (self.w_arap * terms["arap"] + self.w_overhang * terms["overhang"]
+                 + self.w_intersect * terms["intersection"] + self.w_prior * terms["prior"])
+        violation = terms["violation"]
+        return value + np.where(violation > 0, INFEASIBLE + violation, 0.0)
+
+    def terms(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Normalised terms of a batch of poses.
+
+        Parameters
+        ----------
+        angles : (P, m, 3) or (m, 3) float64
+        rotations : (P, d, d) or (d, d) float64, optional
+            Print rotations (see :meth:`raw_terms`).
+
+        Returns
+        -------
+        terms : dict with keys ``arap``, ``overhang``, ``intersection``, ``prior``, ``violation``
+            (P,) float64 arrays (0-d arrays for a single pose).
+        """
+        return self.normalise(self.raw_terms(angles, rotations))
+
+    def evaluate(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> tuple[np.ndarray, dict, dict]:
+        """Objective, normalised terms and raw terms in one pass."""
+        raw = self.raw_terms(angles, rotations)
+        terms = self.normalise(raw)
+        return self.combine(terms), terms, raw
+
+    def bounded(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
+        """Objective of a batch, exact only where it can beat ``bound``.
+
+        What the search minimises: posed with :attr:`search_lbs` (the other
+        methods pose with the rig's own weights). No term is ever negative,
+        so a pose whose cheaper terms alone reach its bound cannot beat it:
+        the terms are computed in order of cost (prior and overhang, then
+        distortion, then the standing rule, then the expensive
+        self-intersection), each only for the poses the ones before leave
+        below their bound; a pose past a joint limit is not
+        measured at all when its bound keeps the rules (below
+        :data:`INFEASIBLE`). The swarm passes each particle's best value as
+        its bound. A batch larger than :data:`POSE_CHUNK` is measured
+        in chunks of that size (the same values; memory no longer grows with
+        the swarm).
+
+        Parameters
+        ----------
+        angles : (P, m, 3) float64
+        bound : (P,) float64
+        rotations : (P, d, d) float64, optional
+            Print rotations (see :meth:`raw_terms`).
+
+        Returns
+        -------
+        values : (P,) float64
+            The objective where it is below ``bound``; elsewhere a lower bound
+            of it that is at least ``bound``.
+        """
+        return self.bounded_overlap(angles, bound, rotations)[0]
+
+    def bounded_overlap(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None,
+                        intersection_bound: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`bounded`, and the self-intersection volume it computed on the way.
+
+        Parameters
+        ----------
+        angles, bound, rotations
+            As :meth:`bounded`.
+        intersection_bound : float, optional
+            Measure the (expensive) self-intersection term only where the
+            other terms are below this too: a pose whose other terms are
+            below its ``bound`` but not below ``intersection_bound`` gets
+            their sum, without the self-intersection term (a lower bound
+            that may be below ``bound``). The search passes the swarm's best
+            value: only a pose that could become the swarm's best is
+            measured in full.
+
+        Returns
+        -------
+        values : (P,) float64
+            As :meth:`bounded` (see ``intersection_bound``).
+        overlap : (P,) float64
+            The ray grid's self-intersection volume where it was computed, 0
+            elsewhere. A closed surface that does not intersect itself is
+            nowhere two layers deep, so a volume above rounding means the pose
+            does intersect itself (the search's exact gate skips CGAL there).
+        """
+        return self._bounded_overlap(angles, np.broadcast_to(np.asarray(bound, np.float64), (len(angles),)),
+                                     rotations, np.inf if intersection_bound is None else float(intersection_bound))
+
+    def _bounded_overlap(self, angles, bound, rotations, intersection_bound=np.inf):
+        """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule."""
+        if len(angles) > POSE_CHUNK:
+            parts = [self._bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
+                                           None if rotations is None else rotations[i:i + POSE_CHUNK],
+                                           intersection_bound)
+                     for i in range(0, len(angles), POSE_CHUNK)]
+            return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
+        excess = np.asarray(self.prior.excess(angles), np.float64)
+        # past a joint limit, against a bound that keeps the rules: INFEASIBLE + excess is a lower bound above it
+        values, overlap = INFEASIBLE + excess, np.zeros(len(excess))
+        keep = np.flatnonzero((excess <= 0) | (bound >= INFEASIBLE))
+        if len(keep) == 0:
+            return values, overlap
+        if len(keep) < len(angles):
+            angles, bound, excess = angles[keep], bound[keep], excess[keep]
+            rotations = None if rotations is None else rotations[keep]
+        transforms, V = self._posed(angles, search=True)
+        # the terms in order of cost, each only for the poses the cheaper ones leave below their bound (every
+        # term is >= 0, so a partial sum is a lower bound); the survivors' value is summed as combine() does
+        prior = np.asarray(self.prior.cost(angles), np.float64)
+        overhang = np.asarray(self.overhang(V, rotations), np.float64)
+        kept = self.w_overhang * (overhang / self.overhang_scale) + self.w_prior * prior
+        todo = np.flatnonzero(kept < bound)
+        arap = np.zeros(len(kept))
+        if len(todo):
+            arap[todo] = arap_mod.arap_energy(self.arap_data, transforms[todo], backend=self.backend)
+            kept[todo] += self.w_arap * (arap[todo] / self.volume)
+            todo = todo[kept[todo] < bound[todo]]
+        if len(todo):
+            violation = excess[todo]
+            if self.keep_standing:
+                violation = violation + self.standing.violation(transforms[todo], V[todo])
+            partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
+                       "intersection": 0.0, "violation": violation}
+            kept[todo] = self.combine(self.normalise(partial))
+            todo = todo[kept[todo] < np.minimum(bound[todo], intersection_bound)]
+        if len(todo) and self.w_intersect != 0:
+            inter = np.asarray(self._intersection(V[todo]), np.float64)
+            overlap[keep[todo]] = inter
+            kept[todo] += self.w_intersect * inter / self.volume
+        values[keep] = kept
+        return values, overlap
+
+    def __call__(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
+        """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""
+        return self.combine(self.terms(angles, rotations))
+
+    def settings(self) -> dict:
+        """The weights and options, for reports."""
+        return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
+                "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
+                "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
+                "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
+                "support_floor": self.support_floor}
+

@@ -1,0 +1,442 @@
+"""What a pose search is asked to do: one frozen settings object.
+
+:class:`SearchSettings` is the single source of the search's defaults and of
+the rule that turns the printer's overhang threshold into the threshold the
+search minimises (``min(angle + margin, 89)``). It builds the
+:class:`~supportless.search.objective.Objective`, is stored in the report, and is
+what the command line, the browser app and the benchmarks pass around.
+
+The bone selection (which bones the search may rotate) lives here too: it turns
+the ``fix``/``free`` settings and the rig into the search's variables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..base.errors import InputError
+from ..files.printer import default_profile
+from ..rig.rig import Rig
+from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
+
+__all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
+           "angle_layout", "resolve_fixed_bones"]
+
+
+class _Auto:
+    """The type of :data:`AUTO`."""
+
+    def __repr__(self) -> str:
+        return "AUTO"
+
+
+#: ``SearchSettings.replace(name=AUTO)`` sets ``name`` to ``None``: the value the tool chooses.
+AUTO = _Auto()
+
+#: The printer's overhang threshold when no profile is given: PrusaSlicer's
+#: defaults, whose automatic threshold is 53.1 degrees
+#: (:func:`supportless.files.printer.overhang_threshold`).
+DEFAULT_OVERHANG_ANGLE = default_profile().overhang_angle
+
+#: Degrees added to the printer's threshold during the search. A search that
+#: counts faces as risky only up to the threshold parks them just past it,
+#: where a slicer working layer by layer still supports some of them. The
+#: margin used to be 10 degrees on a 45-degree threshold: most of that was the
+#: gap to PrusaSlicer's real (automatic) threshold of 53.1 degrees, which the
+#: threshold now follows from the profile; 2 degrees remain, so the default
+#: search counts faces up to 55.1 degrees as before (55).
+OVERHANG_MARGIN = 2.0
+
+#: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
+#: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
+#: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
+#: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
+JOINT_LIMIT = 45.0
+
+#: Print-orientation modes (:attr:`SearchSettings.orient`).
+ORIENT_MODES = ("free", "keep")
+
+#: Candidate printing directions the swarm starts particles at (the best by the
+#: prism estimate at the rest pose). See benchmarks/RESULTS.md, "Pose and
+#: orientation".
+ORIENT_SEEDS = 4
+
+#: The steepest threshold the search uses, degrees (90 would count vertical walls).
+MAX_SEARCH_ANGLE = 89.0
+
+#: The largest swarm and the most iterations a search takes (5000 particles measure the bunny in
+#: about 300 MB; more is a mistake or an attack on the browser app, not a better search).
+MAX_PARTICLES = 5000
+MAX_ITERATIONS = 100_000
+
+#: The allowed values of each numeric setting, ``(low, high)`` inclusive (``None``: no bound): the one source
+#: of :class:`SearchSettings`' checks, the command line's option types and the browser app's fields.
+RANGES = {
+    "particles": (2, MAX_PARTICLES),  # one particle is no swarm: it only ever follows itself
+    "iterations": (0, MAX_ITERATIONS),  # 0: the rest pose and the start positions only
+    "polish": (0, MAX_ITERATIONS),
+    "seed": (0, None),
+    "joint_limit": (0.0, 180.0),
+    "overhang_angle": (0.0, 90.0),
+    "overhang_margin": (0.0, 45.0),
+    "w_arap": (0.0, None),
+    "w_overhang": (0.0, None),
+    "w_intersect": (0.0, None),
+    "w_prior": (0.0, None),
+}
+
+#: Velocity-update coefficients of the swarm. ``standard`` is the
+#: constriction-factor swarm (Clerc & Kennedy); ``libigl`` reproduces igl::pso's.
+#: The searches (:data:`supportless.search.optimizer.OPTIMIZERS`).
+OPTIMIZER_NAMES = ("cma", "pso")
+
+PSO_PRESETS = {
+    "standard": {"inertia": 0.7298, "cognitive": 1.49618, "social": 1.49618},
+    "libigl": {"inertia": 0.98, "cognitive": 0.01, "social": 0.01},
+}
+
+
+#: Bones that move less of the volume than this share follow their parent by
+#: default (:attr:`SearchSettings.minor_share`).
+MINOR_SHARE = 0.003
+
+
+@dataclass(frozen=True)
+class SearchSettings:
+    """Every setting of a pose search, with the tool's defaults.
+
+    Attributes
+    ----------
+    particles, iterations : int
+        Swarm size and number of iterations (the paper: 200 x 120).
+    seed : int
+        Same seed, same result.
+    overhang_angle : float
+        The printer's overhang threshold, degrees from the build plate: what
+        reports count as needing support (default: PrusaSlicer's automatic
+        threshold at its default profile, :data:`DEFAULT_OVERHANG_ANGLE`; see
+        :attr:`supportless.files.printer.PrinterProfile.overhang_angle`).
+    overhang_margin : float
+        The search counts faces up to ``overhang_angle + overhang_margin`` as
+        needing support (see :data:`OVERHANG_MARGIN`).
+    overhang_model : {"prism", "column", "slicer"}
+        Support estimate the search minimises (:class:`supportless.search.objective.Objective`).
+    w_arap, w_overhang, w_intersect : float
+        Weights of the normalised terms.
+    fix, free : tuple of str
+        Bones to fix / free beyond the default (1-based numbers or ``"all"``),
+        see :func:`resolve_fixed_bones`.
+    preset : {"standard", "libigl"}
+        Swarm coefficients, see :data:`PSO_PRESETS`.
+    optimizer : {"pso", "cma"}
+        ``pso``: the paper's particle swarm, ``particles`` for ``iterations``
+        (the default: on the zoo it reaches the lower objective more often,
+        ``benchmarks/optimizers.py``); ``cma``: CMA-ES with ``particles // 5``
+        samples per generation for ``iterations`` generations
+        (:func:`supportless.search.optimizer.evolution_strategy`), faster.
+    polish : int or None
+        Generations of a local CMA-ES after the swarm, from its best pose with
+        small steps (:data:`supportless.search.optimizer.POLISH_SIGMA`); after a dense
+        model's proxy search it runs on the full surface. None (the default):
+        :data:`supportless.search.optimizer.PROXY_POLISH_BUDGET` over the number of
+        triangles after a proxy search (whose best is not quite the full
+        surface's), none otherwise (on the bunny, at a353b18, 120 generations
+        gained 0.4 % of the objective for 30 % more time).
+    exact_intersections : bool
+        Reject candidates for the swarm's best whose surface has intersecting
+        triangles (CGAL's exact test, 3D).
+    w_prior : float
+        Weight of the natural-pose prior (:mod:`supportless.search.prior`).
+    joint_limit : float
+        Largest rotation of a joint, degrees, as one (geodesic) angle: the
+        search turns each free bone by a rotation vector inside this ball.
+        0 fixes every bone (with ``orient="free"``: turning only).
+    limits : tuple of str
+        Per-bone limits ``"BONE=DEGREES"`` (1-based bone numbers), e.g. ``("5=15",)``.
+    keep_standing : bool
+        Reject poses that touch the plate with a new part or fall over
+        (:mod:`supportless.search.standing`).
+    symmetric : bool
+        Keep left/right pairs of bones mirror images (:mod:`supportless.search.layout`).
+    orient : {"free", "keep"}
+        ``free``: search the print orientation with the pose (support is
+        counted with the posed model turned by a rotation R,
+        :mod:`supportless.search.orientation`); ``keep``: print as the model stands.
+    choose : bool
+        With ``orient="free"`` (3D), return the answer with the least
+        predicted slicer support among the search's best, the best pose
+        printed as it stands and the best turned start pose
+        (:func:`supportless.search.choice.choose`); False: the search's best.
+    orient_seeds : int
+        With ``orient="free"``, particles started (at the rest pose) at this
+        many of the best-ranked candidate printing directions.
+    support_floor : float
+        Fixed cost of support however low it is: a height added to every
+        prism of the estimate, as a fraction of the model's height.
+    minor_share : float
+        Bones that move less than this share of the volume when they turn
+        (:attr:`Rig.moved_share`: fingers, toes, facial joints of a game
+        character) follow their parent unless ``free``d: fewer dimensions to
+        search, and they barely change the support.
+    clusters : int or None
+        Rotation clusters of the reduced ARAP energy.
+    resolution : int
+        Ray-grid resolution of the intersection (and column) estimate.
+    backend : {"fast", "numpy"}
+        Energy kernels: numba (parallel over poses) or the numpy reference.
+    """
+
+    particles: int = 200
+    iterations: int = 120
+    seed: int = 0
+    overhang_angle: float = DEFAULT_OVERHANG_ANGLE
+    overhang_margin: float = OVERHANG_MARGIN
+    overhang_model: str = "prism"
+    w_arap: float = W_ARAP
+    w_overhang: float = W_OVERHANG
+    w_intersect: float = W_INTERSECT
+    fix: tuple = ()
+    free: tuple = ()
+    preset: str = "standard"
+    optimizer: str = "pso"
+    polish: int | None = None
+    exact_intersections: bool = True
+    w_prior: float = W_PRIOR
+    joint_limit: float = JOINT_LIMIT
+    limits: tuple = ()
+    keep_standing: bool = True
+    symmetric: bool = False
+    orient: str = "free"
+    orient_seeds: int = ORIENT_SEEDS
+    choose: bool = True
+    support_floor: float = 0.0
+    minor_share: float = MINOR_SHARE
+    clusters: int | None = 100
+    resolution: int = 192
+    backend: str = "fast"
+
+    def __post_init__(self):
+        # bone lists arrive as lists, tuples or one comma-separated string
+        for name in ("fix", "free", "limits"):
+            value = getattr(self, name)
+            if isinstance(value, str):
+                value = [value]
+            items = tuple(t for v in (value or ()) for t in str(v).replace(",", " ").split())
+            object.__setattr__(self, name, items)
+        if self.overhang_model not in OVERHANG_MODELS:
+            raise InputError(None, f"overhang_model must be one of {OVERHANG_MODELS}, not {self.overhang_model!r}")
+        if self.preset not in PSO_PRESETS:
+            raise InputError(None, f"preset must be one of {tuple(PSO_PRESETS)}, not {self.preset!r}")
+        if self.optimizer not in OPTIMIZER_NAMES:
+            raise InputError(None, f"optimizer must be one of {OPTIMIZER_NAMES}, not {self.optimizer!r}")
+        for name in ("particles", "iterations", "polish"):
+            low, high = RANGES[name]
+            value = getattr(self, name)
+            if value is not None and not low <= value <= high:
+                raise InputError(None, f"{name} must be within {low}..{high}, not {value}")
+        if self.orient not in ORIENT_MODES:
+            raise InputError(None, f"orient must be one of {ORIENT_MODES}, not {self.orient!r}")
+        if self.orient_seeds < 0:
+            raise InputError(None, f"orient_seeds must be at least 0, not {self.orient_seeds}")
+        if not _within(self.joint_limit, RANGES["joint_limit"]):
+            raise InputError(None, f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
+        for item in self.limits:
+            _bone, _, value = item.partition("=")
+            try:
+                ok = 0.0 <= float(value) <= 180.0
+            except ValueError:  # float() of a bad number
+                ok = False
+            if not ok:
+                raise InputError(None, f"joint limit {item!r} is not BONE=DEGREES with 0..180 degrees, e.g. 5=15")
+        for name in ("w_arap", "w_overhang", "w_intersect", "w_prior", "support_floor", "overhang_margin"):
+            value = float(getattr(self, name))
+            if not np.isfinite(value):
+                raise InputError(None, f"{name} (--{name.replace('_', '-')}) must be a finite number, "
+                                       f"not {value}")
+            if name == "overhang_margin" and not _within(value, RANGES[name]):
+                raise InputError(None, f"overhang_margin must be within 0..45 degrees, not {value}")
+            if value < 0 and name != "overhang_margin":
+                raise InputError(None, f"{name} (--{name.replace('_', '-')}) must be 0 or more, not {value}: "
+                                       f"a negative weight would reward what the term measures (0 leaves it out)")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+            raise InputError(None, f"seed must be a whole number 0 or more, not {self.seed!r}")
+        if not _within(self.overhang_angle, RANGES["overhang_angle"]):
+            raise InputError(None, f"overhang_angle must be within 0..90 degrees, not {self.overhang_angle}")
+
+    @property
+    def search_overhang_angle(self) -> float:
+        """The threshold the search minimises: ``min(overhang_angle + overhang_margin, 89)`` degrees.
+
+        The ``slicer`` overhang model takes the printer's threshold itself (it carries its own fitted offset).
+        """
+        if self.overhang_model == "slicer":
+            return self.overhang_angle
+        return min(self.overhang_angle + self.overhang_margin, MAX_SEARCH_ANGLE)
+
+    def replace(self, **changes) -> SearchSettings:
+        """A copy with some settings changed: ``None`` leaves a setting as it is, :data:`AUTO` sets it to ``None``.
+
+        ``None`` is what a command passes for an option the user did not give;
+        ``settings.replace(polish=AUTO)`` brings back a setting whose ``None``
+        means "chosen by the tool".
+        """
+        return dataclasses.replace(self, **{k: None if v is AUTO else v for k, v in changes.items() if v is not None})
+
+    def distortion(self, terms: dict):
+        """The distortion part of normalised ``terms`` at these weights (:func:`supportless.search.objective.distortion`)."""
+        return distortion(terms, self.w_arap, self.w_prior)
+
+    def objective(self, rig: Rig, arap_data=None, volume: float | None = None) -> Objective:
+        """The objective the search minimises for ``rig``.
+
+        Parameters
+        ----------
+        rig : Rig
+        arap_data : supportless.energies.arap.ArapData, optional
+            Precomputed ARAP operators of ``rig`` to share (they depend on the
+            rig and ``clusters`` only).
+        volume : float, optional
+            The normalising volume (:class:`~supportless.search.objective.Objective`;
+            default: the rig's).
+
+        Returns
+        -------
+        objective : Objective
+        """
+        return Objective(rig, w_arap=self.w_arap, w_overhang=self.w_overhang, w_intersect=self.w_intersect,
+                         overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
+                         clusters=self.clusters, resolution=self.resolution, backend=self.backend,
+                         arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
+                         keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume)
+
+    def joint_limits(self, rig: Rig) -> np.ndarray:
+        """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.
+
+        Raises
+        ------
+        ValueError
+            For a bone that is not a bone number of ``rig``.
+        """
+        out = np.full(rig.bone_count, float(self.joint_limit))
+        for item in self.limits:
+            bone, _, value = item.partition("=")
+            out[_bone_index(bone, rig.bone_count, rig.labels)] = float(value)
+        return out
+
+    def check_bones(self, bone_count: int, labels: list | None = None) -> None:
+        """Check the bones named in ``fix``, ``free`` and ``limits`` against a skeleton, before a rig exists.
+
+        Raises
+        ------
+        InputError
+            For a bone that is not a bone number 1..``bone_count`` (or a name in ``labels``) or ``"all"``.
+        """
+        for item in (*self.fix, *self.free, *(x.partition("=")[0] for x in self.limits)):
+            if str(item).lower() != "all":
+                _bone_index(item, bone_count, labels)
+
+    def fixed_bones(self, rig: Rig) -> np.ndarray:
+        """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
+        return resolve_fixed_bones(rig, self.fix, self.free, self.minor_share) | (self.joint_limits(rig) == 0.0)
+
+    def to_dict(self) -> dict:
+        """The settings as JSON-ready values, plus the derived ``search_overhang_angle``."""
+        out = dataclasses.asdict(self)
+        out["fix"], out["free"] = list(self.fix), list(self.free)
+        out["search_overhang_angle"] = self.search_overhang_angle
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict) -> SearchSettings:
+        """Settings from :meth:`to_dict` output (unknown and derived keys are ignored)."""
+        names = {f.name for f in dataclasses.fields(cls)}
+        return cls(**{k: v for k, v in data.items() if k in names})
+
+
+# --------------------------------------------------------------------------- #
+# which bones the search rotates
+# --------------------------------------------------------------------------- #
+def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = None,
+                        minor_share: float = 0.0) -> np.ndarray:
+    """Which bones keep their rest rotation during the search.
+
+    By default the bones resting on the build plate and the bones joining
+    them (:attr:`Rig.anchored_bones`): the parts on the plate stay where they
+    are and the rest of the body moves relative to them, about the contact
+    (the rig's kinematic tree hangs from it). Also the bones no vertex is
+    weighted to (:attr:`Rig.weightless_bones`) and, with ``minor_share``, the
+    bones carrying less than that share of the volume.
+
+    Parameters
+    ----------
+    rig : Rig
+    fix, free : list of int or str, optional
+        Bones to fix or free in addition to (or against) the default: 1-based
+        bone numbers as in the TGF file (ints or digit strings), bone names
+        (:attr:`Rig.labels`), or ``"all"``.
+    minor_share : float
+        Fix the bones that move less than this share of the volume
+        (:attr:`Rig.moved_share`).
+
+    Returns
+    -------
+    fixed : (m,) bool
+
+    Raises
+    ------
+    ValueError
+        For a name that is not a bone number or ``"all"``.
+    """
+    m = rig.bone_count
+    fixed = rig.anchored_bones | rig.weightless_bones
+    if minor_share > 0:
+        fixed |= rig.moved_share < minor_share
+    for names, value in ((fix, True), (free, False)):
+        for name in names or []:
+            if str(name).lower() == "all":
+                fixed[:] = value
+                continue
+            fixed[_bone_index(name, m, rig.labels)] = value
+    return fixed
+
+
+def _bone_index(name, m: int, labels: list | None = None) -> int:
+    """0-based index of a bone given as its 1-based number or (a glTF rig) its name; InputError otherwise."""
+    if labels is not None and str(name) in labels:
+        return labels.index(str(name))
+    if labels is not None and not str(name).strip().isdigit():
+        close = [x for x in labels if str(name).lower() in x.lower()][:5]
+        raise InputError(None, f"bone {name!r} is not a bone name or number 1..{m}"
+                         + (f"; did you mean {', '.join(close)}?" if close else ""))
+    try:
+        b = int(name) - 1
+    except ValueError:
+        raise InputError(None, f"bone {name!r} is not a bone number 1..{m} or 'all'") from None
+    if not 0 <= b < m:
+        raise InputError(None, f"bone {name} is out of range 1..{m}")
+    return b
+
+
+def angle_layout(rig: Rig, fixed: np.ndarray) -> np.ndarray:
+    """Which Euler angles the search varies.
+
+    Returns
+    -------
+    free : (m, 3) bool
+        In 2D only the angle about the plane normal (index 2) of free bones.
+    """
+    free = np.zeros((rig.bone_count, 3), bool)
+    if rig.dim == 2:
+        free[~fixed, 2] = True
+    else:
+        free[~fixed] = True
+    return free
+
+
+def _within(value: float, bounds: tuple) -> bool:
+    """``low <= value <= high`` for ``bounds = (low, high)``, ``None`` an open end."""
+    low, high = bounds
+    return (low is None or value >= low) and (high is None or value <= high)
