@@ -51,6 +51,7 @@ from supportless.base.geometry import place_on_plate, print_pose
 from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.energies import slicer_model
 from supportless.files.printer import default_profile, overhang_threshold, read_printer_profile
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
 from supportless.slicing.ranking import distinct_poses
 
@@ -94,7 +95,7 @@ def collect(name, profile, profile_label, rng, out):
         poses.append((f"found{i + 1}" if i else "found", found.angles, found.rotation))
     bare = sl.optimize(rig, sl.SearchSettings(overhang_angle=angle, overhang_margin=0.0))
     poses.append(("found_no_margin", bare.angles, bare.rotation))
-    scale = scale_for_height(rig.vertices, rig.up, 60.0)
+    scale = scale_for_height(rig.vertices, rig.up, REFERENCE_HEIGHT_MM)
     sliced = slice_support([(print_vertices(rig, A, R), rig.faces) for _, A, R in poses], rig.up, scale,
                            workers=2, profile=profile if profile.path else None)
     for (label, A, R), run in zip(poses, sliced.meshes):
@@ -108,7 +109,7 @@ def collect(name, profile, profile_label, rng, out):
 
 def features(rig, rows, delta, interface_mm):
     """(len(rows), 3) features of the sampled poses at 60 mm."""
-    scale = scale_for_height(rig.vertices, rig.up, 60.0)
+    scale = scale_for_height(rig.vertices, rig.up, REFERENCE_HEIGHT_MM)
     V = np.stack([print_vertices(rig, r["angles"], r["rotation"]) for r in rows])
     return slicer_model.support_features(V, rig.faces, rig.up, rows[0]["threshold"], scale, delta, interface_mm)
 
@@ -247,7 +248,7 @@ def slicer_search(samples, names):
         t0 = time.perf_counter()
         result = sl.optimize(rig, sl.SearchSettings(overhang_angle=angle, overhang_model="slicer"))
         seconds = time.perf_counter() - t0
-        scale = scale_for_height(rig.vertices, rig.up, 60.0)
+        scale = scale_for_height(rig.vertices, rig.up, REFERENCE_HEIGHT_MM)
         mm = slice_support([(print_vertices(rig, result.angles, result.rotation), rig.faces)], rig.up, scale,
                            workers=1).meshes[0]["support_mm"]
         rest, found = ref[(name, "rest")]["slicer_mm"], ref[(name, "found")]["slicer_mm"]

@@ -32,6 +32,7 @@ import numpy as np
 from models import DATA
 
 import supportless as sl
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import slice_check
 
@@ -47,13 +48,13 @@ def run(path: Path, cache_dir: str) -> dict:
 
     rest = read_gltf_skin(path).vertices
     height_m = float(np.ptp(rest[:, 1]))
-    rig = sl.load_rig(path, cache_dir=cache_dir, height_mm=60.0)
+    rig = sl.load_rig(path, cache_dir=cache_dir, height_mm=REFERENCE_HEIGHT_MM)
     prepare_s = time.perf_counter() - t0
     rest_pairs = intersecting_face_pairs(rig.vertices, rig.faces)
     result = sl.optimize(rig)
     report = build_report(rig, result)
     sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
-                         height_mm=60.0).to_dict()
+                         height_mm=REFERENCE_HEIGHT_MM).to_dict()
     with tempfile.TemporaryDirectory() as tmp:
         for label, file in write_pictures(tmp, rig, result, report):
             if Path(file).name == "print.png":

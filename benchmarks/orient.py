@@ -48,6 +48,7 @@ from models import DATA, SHARED, available, load
 import supportless as sl
 from supportless.base.geometry import print_pose
 from supportless.energies.surface import boundary_edges
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import reduction
 from supportless.search.orientation import rotations_from_params, seed_params
 from supportless.slicing.prusaslicer import scale_for_height, slice_support
@@ -65,7 +66,7 @@ def load_any(name: str) -> sl.Rig:
     if name.startswith("gltf:"):
         stem = name[5:]
         path = next(p for p in (GLTF / f"{stem}.glb", GLTF / "quaternius" / f"{stem}.glb") if p.is_file())
-        return sl.load_rig(path, height_mm=60.0)
+        return sl.load_rig(path, height_mm=REFERENCE_HEIGHT_MM)
     return load(name)
 
 
@@ -140,7 +141,7 @@ def measure(name: str, slice_best: int) -> dict:
         index[key] = same
     up3 = np.append(up, 0.0) if rig.dim == 2 else up
     t0 = time.perf_counter()
-    sliced = slice_support([sliceable(rig, W) for W in unique], up3, scale_for_height(sliceable(rig, V)[0], up3, 60.0),
+    sliced = slice_support([sliceable(rig, W) for W in unique], up3, scale_for_height(sliceable(rig, V)[0], up3, REFERENCE_HEIGHT_MM),
                            workers=2, by_feature=True).support_mm
     row["slice_s"] = time.perf_counter() - t0
     mm = {key: float(sliced[index[key]]) for key in names}

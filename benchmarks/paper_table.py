@@ -25,6 +25,7 @@ from pathlib import Path
 from models import available, load
 
 import supportless as sl
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import find_prusa_slicer, slice_check
 
@@ -45,7 +46,7 @@ def run(name: str, args) -> dict:
     rep = build_report(rig, res)
     row = {"model": name, "runtime_s": runtime, "report": rep}
     if find_prusa_slicer() and rig.dim == 3:
-        sc = slice_check((rig.vertices, rig.faces), (res.vertices, rig.faces), up=rig.up, height_mm=60.0)
+        sc = slice_check((rig.vertices, rig.faces), (res.vertices, rig.faces), up=rig.up, height_mm=REFERENCE_HEIGHT_MM)
         row["slicer"] = sc.to_dict()
     if args.keep:
         out = Path(args.keep)

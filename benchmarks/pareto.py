@@ -24,6 +24,7 @@ import numpy as np
 
 import supportless as sl
 from supportless.apps.pareto import pareto_front
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import predicted_slicer
 from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
 
@@ -49,7 +50,7 @@ def run(name, count, gallery, methods):
     fronts = {m: pareto_front(rig, settings, count, method=m) for m in methods}
     rest_pred = predicted_slicer(rig, single)["before_mm"]
     d_max = max(max(p.distortion for p in f.poses) for f in fronts.values()) or 1e-12
-    scale = scale_for_height(rig.vertices, rig.up, 60.0)
+    scale = scale_for_height(rig.vertices, rig.up, REFERENCE_HEIGHT_MM)
     meshes = [(rig.vertices, rig.faces), (single.print_vertices, rig.faces)]
     for f in fronts.values():
         meshes += [(f.poses[0].result.print_vertices, rig.faces), (f.poses[-1].result.print_vertices, rig.faces)]

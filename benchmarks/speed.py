@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 
 from supportless.apps.bench import run_bench
+from supportless.search.settings import SearchSettings
 
 
 def main():
@@ -19,8 +20,8 @@ def main():
     ap.add_argument("model", nargs="?", default=None)
     ap.add_argument("--skeleton", "-s", default=None)
     ap.add_argument("--up", default="y")
-    ap.add_argument("--particles", type=int, default=200)
-    ap.add_argument("--iterations", type=int, default=120)
+    ap.add_argument("--particles", type=int, default=SearchSettings.particles)
+    ap.add_argument("--iterations", type=int, default=SearchSettings.iterations)
     ap.add_argument("--backend", choices=["both", "fast", "numpy"], default="both")
     args = ap.parse_args()
     run_bench(args.model, args.skeleton, args.up, particles=args.particles, iterations=args.iterations,

@@ -31,6 +31,7 @@ from models import DATA, SHARED, available
 
 import supportless as sl
 from supportless.base.kinematics import euler_to_matrix
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import SlicerError, slice_check
 
@@ -89,7 +90,7 @@ def run(name: str, settings, pictures: Path) -> dict:
            "rotation": largest_rotation_deg(report, result.angles)}
     try:
         row["slicer"] = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
-                                    height_mm=60.0).to_dict()
+                                    height_mm=REFERENCE_HEIGHT_MM).to_dict()
     except SlicerError as exc:  # SlicerNotFound included
         row["slicer_error"] = str(exc).splitlines()[0]
     written = dict(write_pictures(pictures / name, rig, result, report))

@@ -13,7 +13,7 @@ from .base import numba_cache
 
 numba_cache.configure()  # before numba is imported: a read-only install with no home still runs
 
-from .base.errors import InputError, SupportlessError
+from .base.errors import InputError, SlicerError, SupportlessError
 from .base.kinematics import forward_kinematics, lbs_matrix, skin
 from .energies.arap import arap_energy, arap_energy_direct, arap_precompute
 from .energies.intersection import self_intersection_volume
@@ -29,10 +29,23 @@ from .shapes import DEMO_FIGURES, demo_figure
 
 __version__ = "0.1.0"
 
+#: Names of later stages, imported when first used (matplotlib and the slicer bridge stay out of ``import supportless``).
+_LATER = {"build_report": "supportless.report.report", "write_pictures": "supportless.report.report",
+          "slice_check": "supportless.slicing.prusaslicer"}
+
+
+def __getattr__(name: str):
+    if name in _LATER:
+        import importlib
+
+        return getattr(importlib.import_module(_LATER[name]), name)
+    raise AttributeError(f"module 'supportless' has no attribute {name!r}")
+
+
 __all__ = [
-    "DEMO_FIGURES", "InputError", "Objective", "PoseResult", "Rig", "SearchSettings", "SupportlessError", "arap_energy",
-    "arap_energy_direct", "arap_precompute", "demo_figure", "forward_kinematics", "lbs_matrix", "load_rig",
-    "optimize", "overhang_energy", "particle_swarm", "prepare_rig", "read_mesh", "read_pose", "read_tgf",
-    "risky_area", "risky_faces", "self_intersection_volume", "skin", "support_volume", "write_mesh",
-    "write_pose", "write_tgf",
+    "DEMO_FIGURES", "InputError", "Objective", "PoseResult", "Rig", "SearchSettings", "SlicerError", "SupportlessError",
+    "arap_energy", "arap_energy_direct", "arap_precompute", "build_report", "demo_figure", "forward_kinematics",
+    "lbs_matrix", "load_rig", "optimize", "overhang_energy", "particle_swarm", "prepare_rig", "read_mesh", "read_pose",
+    "read_tgf", "risky_area", "risky_faces", "self_intersection_volume", "skin", "slice_check", "support_volume",
+    "write_mesh", "write_pictures", "write_pose", "write_tgf",
 ]

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.files import meshes as io
 from supportless.base.geometry import parse_up, signed_volume
+from supportless.files import meshes as io
 
 FORMATS = ["stl", "obj", "ply", "off", "3mf", "glb"]
 

@@ -67,8 +67,9 @@ def test_prism_and_column_differ_where_the_body_is_below_an_overhang(rig):
     V = rig.pose(A)
     prism = sl.Objective(rig, overhang_model="prism")
     column = sl.Objective(rig, overhang_model="column")
-    assert float(prism.overhang(V)[0]) == sl.overhang_energy(V[0], rig.faces, rig.up, 45.0)
-    assert float(column.overhang(V)[0]) == sl.support_volume(V[0], rig.faces, rig.up, 45.0, column.resolution)
+    assert float(prism.overhang(V)[0]) == sl.overhang_energy(V[0], rig.faces, rig.up, prism.overhang_angle)
+    assert float(column.overhang(V)[0]) == sl.support_volume(V[0], rig.faces, rig.up, column.overhang_angle,
+                                                             column.resolution)
     grow_prism = float(prism.terms(A)["overhang"][0]) - 1.0
     grow_column = float(column.terms(A)["overhang"][0]) - 1.0
     assert grow_prism > 0.3  # the head's underside is far above the plate

@@ -81,7 +81,7 @@ def test_inverted_winding_same_result():
 @pytest.mark.parametrize("angle", [50.0, 60.0, 80.0])
 def test_arm_tilted_beyond_threshold_is_zero(angle):
     V, F = tilted_arm_shape(angle)
-    assert overhang_energy(V, F, UP) == pytest.approx(0.0, abs=1e-12)
+    assert overhang_energy(V, F, UP, overhang_angle=45.0) == pytest.approx(0.0, abs=1e-12)
 
 
 def test_arm_below_threshold_matches_brute_force():
@@ -107,7 +107,7 @@ def test_bunny_random_directions_brute_force(shared_data):
     rng = np.random.default_rng(3)
     for _ in range(3):
         up = rng.normal(size=3)
-        assert overhang_energy(V, F, up) == pytest.approx(brute_force(V, F, up), rel=1e-9)
+        assert overhang_energy(V, F, up, overhang_angle=45.0) == pytest.approx(brute_force(V, F, up), rel=1e-9)
 
 
 def test_batch_equals_single():

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 import supportless as sl
 from supportless.apps.cli import main
 from supportless.base.geometry import signed_volume
-from supportless.files.printframe import DEFAULT_HEIGHT_MM, print_frame, rotation_to_z
+from supportless.files.printframe import REFERENCE_HEIGHT_MM, print_frame, rotation_to_z
 
 
 def run(*args):
@@ -32,7 +32,7 @@ def test_the_print_frame_has_up_along_z_in_mm_on_the_plate_centred(up):
     frame = print_frame(V, u)
     P = frame.place(V)
     assert P[:, 2].min() == pytest.approx(0.0, abs=1e-12)
-    assert np.ptp(P[:, 2]) == pytest.approx(DEFAULT_HEIGHT_MM)  # the box's height along up is 60 mm
+    assert np.ptp(P[:, 2]) == pytest.approx(REFERENCE_HEIGHT_MM)  # the box's height along up is 60 mm
     np.testing.assert_allclose(0.5 * (P[:, :2].min(axis=0) + P[:, :2].max(axis=0)), 0.0, atol=1e-9)
     # a proper rotation and a uniform scale: no mirror, volumes scale by the cube of the factor
     assert signed_volume(P, F) == pytest.approx(signed_volume(V, F) * frame.scale ** 3)
@@ -149,8 +149,8 @@ def test_optimize_and_apply_write_z_up_millimetre_files_at_the_default_size(tiny
         np.testing.assert_allclose(0.5 * (P[:, :2].min(axis=0) + P[:, :2].max(axis=0)), 0.0, atol=0.01)
         assert 20.0 < np.ptp(P[:, 2]) < 300.0
     report = json.loads((out / "report.json").read_text())
-    assert report["print_frame"]["height_mm"] == DEFAULT_HEIGHT_MM
-    assert report["predicted_slicer"]["height_mm"] == DEFAULT_HEIGHT_MM
+    assert report["print_frame"]["height_mm"] == REFERENCE_HEIGHT_MM
+    assert report["predicted_slicer"]["height_mm"] == REFERENCE_HEIGHT_MM
     # the rest pose (all angles zero) written by apply is the rest pose, 60 mm tall
     pose = json.loads((out / "pose.json").read_text())
     zero = tmp_path / "zero.json"
@@ -252,7 +252,7 @@ def test_a_file_size_no_figure_has_is_one_warning_naming_height_mm(height_mm, wa
     """A glTF says metres: a 79 m fox or a 0.5 mm person means wrong units; 3.2 mm to 1.8 m are believed."""
     V = np.array([[0.0, 0.0, 0.0], [0.3, height_mm, 0.2], [0.1, height_mm / 2, 0.4]]) * [height_mm / 10, 1, 1]
     frame = print_frame(V, (0.0, 1.0, 0.0), unit="mm")
-    assert frame.height_mm == DEFAULT_HEIGHT_MM
+    assert frame.height_mm == REFERENCE_HEIGHT_MM
     message = frame.unusual()
     assert (message is not None) == warned
     if warned:

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.report import report as report_mod
 from supportless.copyleft.cgal import intersecting_face_pairs
+from supportless.report import report as report_mod
 from supportless.report.report import build_report, pose_measures, reduction, write_pictures
 from supportless.search.settings import SearchSettings
 

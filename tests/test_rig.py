@@ -8,11 +8,11 @@ import pytest
 
 import supportless as sl
 from supportless.base import kinematics as kin
-from supportless.rig import rig as rig_mod
-from supportless.search import optimizer as search_mod
 from supportless.base.errors import InputError
 from supportless.base.geometry import signed_volume
 from supportless.files.meshes import write_dmat, write_tet_mesh
+from supportless.rig import rig as rig_mod
+from supportless.search import optimizer as search_mod
 
 
 @pytest.fixture(scope="module")

@@ -89,3 +89,26 @@ def test_angle_layout_three_angles_in_3d_one_in_2d(branch_rig):
     rig2 = sl.prepare_rig(V, F, J, B, up="y")
     free2 = angle_layout(rig2, np.zeros(rig2.bone_count, bool))
     assert free2[:, 2].all() and not free2[:, :2].any()
+
+
+def test_the_energies_default_angle_is_the_default_search_s(branch_rig):
+    """``overhang_energy(V, F, up)`` measures what the default search minimises (one source: the threshold rule)."""
+    from supportless.files.printer import SEARCH_OVERHANG_ANGLE, default_profile, search_angle
+
+    settings = SearchSettings()
+    assert settings.search_overhang_angle == SEARCH_OVERHANG_ANGLE == search_angle(default_profile().overhang_angle)
+    assert 55.0 < SEARCH_OVERHANG_ANGLE < 55.2  # PrusaSlicer's automatic 53.1 degrees and the 2-degree margin
+    V, F, up = branch_rig.vertices, branch_rig.faces, branch_rig.up
+    assert sl.overhang_energy(V, F, up) == sl.overhang_energy(V, F, up, settings.search_overhang_angle)
+    assert sl.overhang_energy(V, F, up) != sl.overhang_energy(V, F, up, 45.0)  # the angle matters on this figure
+    assert settings.objective(branch_rig).overhang_angle == SEARCH_OVERHANG_ANGLE == sl.Objective(branch_rig).overhang_angle
+
+
+def test_replace_keeps_a_setting_on_none_and_resets_it_on_auto():
+    from supportless.search.settings import AUTO
+
+    s = SearchSettings(polish=5)
+    assert s.replace(polish=None).polish == 5 and s.replace(polish=AUTO).polish is None
+    assert s.replace(particles=7).particles == 7
+    with pytest.raises(sl.InputError, match="particles must be within 2..5000"):
+        s.replace(particles=1)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from slicers import fake_exe, stand_in_slicer
 
-from supportless.slicing import prusaslicer as sl
 from supportless.base.errors import InputError, SupportlessError
 from supportless.files.meshes import read_mesh
 from supportless.report.report import reduction
+from supportless.slicing import prusaslicer as sl
 from supportless.slicing.prusaslicer import (
     SliceReport,
     SlicerError,

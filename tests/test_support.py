@@ -152,22 +152,22 @@ def test_sphere_analytic():
     # facets cross 45 degrees) is only known to a facet, and the grid adds
     # <= cell / 2 * rim length 4.4 * rim height 0.29 = 3 %; measured 0.9 %
     # (support) and 1.3 % (prism)
-    assert support_volume(s.vertices, s.faces, UP) == pytest.approx(ref, rel=0.03)
-    assert overhang_energy(s.vertices, s.faces, UP) == pytest.approx(ref, rel=0.03)
+    assert support_volume(s.vertices, s.faces, UP, 45.0) == pytest.approx(ref, rel=0.03)
+    assert overhang_energy(s.vertices, s.faces, UP, 45.0) == pytest.approx(ref, rel=0.03)
 
 
 def test_bunny_matches_brute_force(shared_data):
     m = trimesh.load(shared_data / "bunny.obj", process=False)
     R = trimesh.transformations.rotation_matrix(2.0, [1.0, 0.3, 0.0])
     m.apply_transform(R)
-    got = support_volume(m.vertices, m.faces, UP, resolution=64)
+    got = support_volume(m.vertices, m.faces, UP, 45.0, resolution=64)
     ref = brute_force_columns(m, 64)
     assert got > 0
     # the same rays; the reference's barycentric test may differ only on
     # rays within round-off of an edge (none here): equal up to summation order
     assert got == pytest.approx(ref, rel=1e-12)
     # the prism over-estimates (it also counts support resting on the model)
-    assert overhang_energy(m.vertices, m.faces, UP) > got
+    assert overhang_energy(m.vertices, m.faces, UP, 45.0) > got
 
 
 def test_batch_equals_single():

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from conftest import unavailable
 
-from supportless.files import posefile
 from supportless.apps.ui import App, find_free_port
 from supportless.base.errors import InputError
 from supportless.base.geometry import print_pose, print_transform
+from supportless.files import posefile
 from supportless.rig.rig import load_rig
 from supportless.search.orientation import rotation_between
 from supportless.search.settings import SearchSettings
@@ -102,7 +102,7 @@ def test_posing_updates_measures_and_latency(app, rig):
     assert app.wait_idle()
     assert app.measures["objective"] != pytest.approx(rest["objective"])
     assert app.measures["terms"]["arap"] > rest["terms"]["arap"]
-    assert app.latency_ms["mesh"] >= 0 and app.latency_ms["full"] >= app.latency_ms["mesh"]
+    assert app.latency_ms["mesh"] > 0 and np.isfinite(app.latency_ms["full"])  # measured for this edit
     assert "Objective:" in app.panel.measures.content
 
 

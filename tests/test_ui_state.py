@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
-from supportless.files import posefile
 from supportless.apps.ui.state import EditorState
 from supportless.base.errors import SupportlessError
 from supportless.base.geometry import print_pose
 from supportless.base.kinematics import euler_to_matrix
+from supportless.files import posefile
 from supportless.report.report import pose_measures
 from supportless.search.optimizer import optimize
 from supportless.search.orientation import print_direction, rotation_axis_angle, rotation_between
@@ -225,7 +225,7 @@ def test_invalid_bone_list_is_a_clear_error(state, branch_rig):
     assert state.settings == before
     with pytest.raises(ValueError, match="out of range"):
         state.start_optimize(free="0")
-    with pytest.raises(ValueError, match="every bone is fixed"):
+    with pytest.raises(ValueError, match="every bone of .* is fixed"):
         state.start_optimize(fix="all", orient="keep")  # with orient="free" the search may still turn it
     assert not state.optimizing
     state.update_settings(fix="1", free="")

@@ -29,6 +29,7 @@ import sys
 import tempfile
 from typing import Callable
 
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from .bench import SHARED_DATA
 
 __all__ = ["CASES", "TARGETS", "format_table", "measure_case", "run_targets"]
@@ -59,7 +60,7 @@ def _prepare(case: str, cache_dir: str):
         V, F, J, B = character()
         return prepare_rig(V, F, J, B, up="y", name="character")
     if case == "robot":
-        return load_rig(SHARED_DATA / "gltf" / "RobotExpressive.glb", cache_dir=cache_dir, height_mm=60.0)
+        return load_rig(SHARED_DATA / "gltf" / "RobotExpressive.glb", cache_dir=cache_dir, height_mm=REFERENCE_HEIGHT_MM)
     if case == "bunny111k":
         import igl
         import numpy as np
@@ -149,7 +150,7 @@ def _choice_times(rig, settings, result) -> dict:
            "chosen_kind": result.stats.get("chosen_kind")}
     if result.choice is not None and find_prusa_slicer():
         t = time.perf_counter()
-        sliced = slice_choice(rig, result, SLICE_RANK, height_mm=60.0)
+        sliced = slice_choice(rig, result, SLICE_RANK, height_mm=REFERENCE_HEIGHT_MM)
         row |= {"slice_s": time.perf_counter() - t, "sliced_kind": sliced.stats.get("chosen_kind"),
                 "sliced": sum(c.sliced_mm is not None for c in sliced.choice.candidates)}
     return row

@@ -18,6 +18,8 @@ from ..base.errors import InputError
 from ..base.interrupt import deferred_interrupt
 from ..base.interrupt import requested as interrupt_requested
 from ..files.paths import check_output_paths
+from ..files.printframe import REFERENCE_HEIGHT_MM
+from ..search.settings import RANGES, SearchSettings
 from ..shapes import DEMO_FIGURES
 from .cli_batch import batch
 from .cli_common import (
@@ -84,13 +86,11 @@ def _run_search(rig, console, settings, quiet=False):
                                                        f"· overhang {t['overhang']:.3f} "
                                                        f"· intersect {t['intersection']:.3f}")
 
-        fixed = settings.fixed_bones(rig)  # a bad --fix/--free, or nothing left to move: before the search
-        why = (f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} of {rig.bone_count} rest on the "
-               "build plate or join bones that do)")
-        if fixed.all() and settings.orient == "keep":
+        why = settings.all_fixed(rig)  # a bad --fix/--free, or nothing left to move: before the search
+        if why and settings.orient == "keep":
             raise InputError(None, f"{why}: free some with --free 2,3 or --free all, or let the search turn it "
                                    "with --orient free")
-        if fixed.all():
+        if why:
             click.echo(f"supportless: note: {why}: the search only turns it (--free 2,3 or --free all to pose it)",
                        err=True)
         return optimize(rig, settings, callback=callback)
@@ -525,7 +525,7 @@ def _grams_and_time(side: dict) -> str:
 @click.argument("original", type=click.Path(dir_okay=False))
 @click.argument("posed", type=click.Path(dir_okay=False))
 @click.option("--up", default="y", show_default=True, help="Printing direction of ORIGINAL.")
-@click.option("--height-mm", default=60.0, show_default=True, type=click.FloatRange(min=1.0),
+@click.option("--height-mm", default=REFERENCE_HEIGHT_MM, show_default=True, type=click.FloatRange(min=1.0),
               help="ORIGINAL is scaled to this height along --up.")
 @click.option("--posed-as", type=click.Choice(["written", "original"]), default="written", show_default=True,
               help="written: POSED is a print file (as `optimize -o` writes it: +Z up, millimetres) and is sliced "
@@ -587,7 +587,6 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     from ..report.render import render_mesh
     from ..report.report import build_report
     from ..rig.rig import load_rig
-    from ..search.settings import SearchSettings
 
     settings = _settings(particles=particles, iterations=iterations, seed=seed)
     check_output_paths((), [("--out", out_dir)])
@@ -660,8 +659,10 @@ def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, ca
 @click.argument("model", required=False, type=click.Path(dir_okay=False))
 @click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None)
 @click.option("--up", default="y", show_default=True)
-@click.option("--particles", default=200, show_default=True, type=click.IntRange(2, None))
-@click.option("--iterations", default=120, show_default=True, type=click.IntRange(1, None))
+@click.option("--particles", default=SearchSettings.particles, show_default=True,
+              type=click.IntRange(*RANGES["particles"]))
+@click.option("--iterations", default=SearchSettings.iterations, show_default=True,
+              type=click.IntRange(1, RANGES["iterations"][1]))
 @click.option("--backend", type=click.Choice(["fast", "numpy", "both"]), default="both", show_default=True)
 @click.option("--targets", is_flag=True,
               help="Instead: the speed targets of big rigs (bunny, bb-bunny, a 68-bone character, the glTF robot, "

@@ -14,7 +14,7 @@ import click
 
 from ..base.errors import SupportlessError
 from ..base.terminal import ClosableStdout, drop_stdout
-from ..files.printframe import DEFAULT_HEIGHT_MM
+from ..files.printframe import REFERENCE_HEIGHT_MM
 
 EXIT_USER_ERROR = 2
 #: Exit status when an output file could not be written (the others were).
@@ -86,7 +86,7 @@ def rig_options(f):
                      help="Print the model at the file's own size, its units read as millimetres (glTF metres "
                           "become millimetres).")(f)
     f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
-                     help=f"Print the rest pose this tall along --up, in millimetres [default: {DEFAULT_HEIGHT_MM:g}]. "
+                     help=f"Print the rest pose this tall along --up, in millimetres [default: {REFERENCE_HEIGHT_MM:g}]. "
                           "Written files are +Z up, in millimetres, on the plate.")(f)
     f = click.option("--weights", type=click.Path(dir_okay=False), default=None,
                      help="Precomputed skinning weights (.dmat, one row per --tets vertex); for a glTF model "

@@ -45,8 +45,7 @@ import numpy as np
 from ..base.geometry import place_on_plate, print_pose
 from ..base.interrupt import requested
 from ..energies.slicer_model import predicted_support_mm
-from ..files.printframe import PrintFrame, rig_print_frame
-from ..report.report import PREDICTION_HEIGHT_MM
+from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
 from ..rig.rig import Rig
 from ..search.layout import PoseLayout, require_mirror
 from ..search.optimizer import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance_deg
@@ -228,7 +227,7 @@ def _measure(rig: Rig, objective, angles: np.ndarray, rotations: np.ndarray, bas
         up = np.asarray(rig.up, float)
         height = float(np.ptp(rig.vertices @ up))
         V = np.stack([print_pose(place_on_plate(rig.pose(a), up), r, up) for a, r in zip(angles, rotations)])
-        support = predicted_support_mm(V, rig.faces, up, base.overhang_angle, PREDICTION_HEIGHT_MM / height)
+        support = predicted_support_mm(V, rig.faces, up, base.overhang_angle, REFERENCE_HEIGHT_MM / height)
     return np.asarray(support, float), np.asarray(distortion, float), ok
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..files.printer import SEARCH_OVERHANG_ANGLE
 from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area"]
@@ -189,7 +190,7 @@ def _out(x, single):
     return float(x[0]) if single else np.ascontiguousarray(x)
 
 
-def risky_faces(vertices, faces, up, overhang_angle=45.0, backend="fast"):
+def risky_faces(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backend="fast"):
     """Mask of risky (support-needing) surface elements.
 
     Parameters
@@ -219,7 +220,7 @@ def risky_faces(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     return mask[0] if single else mask
 
 
-def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
+def risky_area(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backend="fast"):
     """Total area (length in 2D) of the risky surface elements.
 
     Parameters
@@ -232,7 +233,8 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
         Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
         (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
-        Threshold slope in degrees from the build plate (default 45).
+        Threshold slope in degrees from the build plate (default: the default
+        search's, :data:`~supportless.files.printer.SEARCH_OVERHANG_ANGLE`).
     backend : {"fast", "numpy"}
         ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
         numpy reference (same result up to round-off).
@@ -246,7 +248,7 @@ def risky_area(vertices, faces, up, overhang_angle=45.0, backend="fast"):
     return _out(out[:, 1], single)
 
 
-def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", floor=0.0, orient=None):
+def overhang_energy(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backend="fast", floor=0.0, orient=None):
     """Prism overhang energy ``sum_f A_f |n_f . up| (h_f + floor)`` over risky faces.
 
     Parameters
@@ -261,8 +263,8 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", fl
         Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
         (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
-        Threshold slope ``theta`` in degrees from the build plate (default
-        45); risky when ``n . up < -cos(theta)``.
+        Threshold slope ``theta`` in degrees from the build plate (default:
+        the default search's, 55.1); risky when ``n . up < -cos(theta)``.
     backend : {"fast", "numpy"}
         ``fast``: numba kernels (parallel over poses); ``numpy``: the plain
         numpy reference (same result up to round-off).
@@ -286,7 +288,7 @@ def overhang_energy(vertices, faces, up, overhang_angle=45.0, backend="fast", fl
     return _out(out[:, 0], single)
 
 
-def projected_risky_area(vertices, faces, up, overhang_angle=45.0):
+def projected_risky_area(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE):
     """Area of the risky faces projected on the build plate.
 
     Parameters
@@ -299,7 +301,8 @@ def projected_risky_area(vertices, faces, up, overhang_angle=45.0):
         Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
         (:func:`supportless.energies.surface.prepare`).
     overhang_angle : float
-        Threshold slope in degrees from the build plate (default 45).
+        Threshold slope in degrees from the build plate (default: the default
+        search's, :data:`~supportless.files.printer.SEARCH_OVERHANG_ANGLE`).
 
     Returns
     -------

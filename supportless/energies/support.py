@@ -19,13 +19,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..files.printer import SEARCH_OVERHANG_ANGLE
 from .raygrid import DEFAULT_RESOLUTION, ray_grid
 from .surface import prepare
 
 __all__ = ["support_volume", "DEFAULT_RESOLUTION"]
 
 
-def support_volume(vertices, faces, up, overhang_angle=45.0, resolution=DEFAULT_RESOLUTION, backend="fast"):
+def support_volume(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, resolution=DEFAULT_RESOLUTION, backend="fast"):
     """Volume (area in 2D) of vertical support columns under risky faces.
 
     Parameters

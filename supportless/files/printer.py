@@ -31,8 +31,9 @@ from pathlib import Path
 
 from ..base.errors import InputError
 
-__all__ = ["DEFAULT_DENSITY", "FILAMENT_DIAMETER_MM", "PRUSA_DEFAULTS", "PrinterProfile", "default_profile", "mm_to_cm3",
-           "overhang_threshold", "read_printer_profile"]
+__all__ = ["DEFAULT_DENSITY", "DEFAULT_OVERHANG_ANGLE", "FILAMENT_DIAMETER_MM", "MAX_SEARCH_ANGLE", "OVERHANG_MARGIN",
+           "PRUSA_DEFAULTS", "PrinterProfile", "SEARCH_OVERHANG_ANGLE", "default_profile", "mm_to_cm3",
+           "overhang_threshold", "read_printer_profile", "search_angle"]
 
 #: PrusaSlicer's built-in defaults of the keys this tool reads (PrusaSlicer
 #: 2.5, no vendor preset): what a profile that lacks a key means.
@@ -248,3 +249,33 @@ def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:
         ``mm * pi * (diameter_mm / 2)**2 / 1000``.
     """
     return mm * math.pi * (diameter_mm / 2.0) ** 2 / 1000.0
+
+
+# --------------------------------------------------------------------------- #
+# the threshold rule: the printer's threshold, and the one the search minimises
+# --------------------------------------------------------------------------- #
+#: The printer's overhang threshold when no profile is given: PrusaSlicer's
+#: defaults, whose automatic threshold is 53.1 degrees (:func:`overhang_threshold`).
+DEFAULT_OVERHANG_ANGLE = default_profile().overhang_angle
+
+#: Degrees added to the printer's threshold during the search. A search that
+#: counts faces as risky only up to the threshold parks them just past it,
+#: where a slicer working layer by layer still supports some of them. The
+#: margin used to be 10 degrees on a 45-degree threshold: most of that was the
+#: gap to PrusaSlicer's real (automatic) threshold of 53.1 degrees, which the
+#: threshold now follows from the profile; 2 degrees remain, so the default
+#: search counts faces up to 55.1 degrees as before (55).
+OVERHANG_MARGIN = 2.0
+
+#: The steepest threshold the search uses, degrees (90 would count vertical walls).
+MAX_SEARCH_ANGLE = 89.0
+
+
+def search_angle(threshold: float, margin: float = OVERHANG_MARGIN) -> float:
+    """The threshold the search minimises for a printer's ``threshold``: ``min(threshold + margin, 89)`` degrees."""
+    return min(threshold + margin, MAX_SEARCH_ANGLE)
+
+
+#: The search's threshold at the default profile (55.1 degrees): the energies' default angle, so that
+#: ``overhang_energy(V, F, "y")`` measures what the default search minimises.
+SEARCH_OVERHANG_ANGLE = search_angle(DEFAULT_OVERHANG_ANGLE)

@@ -9,7 +9,7 @@ x = y = 0 and the lowest point at z = 0. glTF keeps its own convention (+Y up,
 metres): :meth:`PrintFrame.to_gltf`.
 
 The scale is chosen once per model, from its rest pose: by default the rest
-pose is printed :data:`DEFAULT_HEIGHT_MM` tall, the height the tool's slicer
+pose is printed :data:`REFERENCE_HEIGHT_MM` tall, the height the tool's slicer
 figures are for; ``--height-mm`` chooses another height and ``--keep-units``
 keeps the file's own units (read as millimetres; glTF metres become
 millimetres).
@@ -23,11 +23,11 @@ import numpy as np
 
 from ..base.errors import InputError
 
-__all__ = ["BELIEVABLE_FILE_HEIGHT_MM", "DEFAULT_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
+__all__ = ["BELIEVABLE_FILE_HEIGHT_MM", "REFERENCE_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
            "rotation_to_z"]
 
 #: The printed height of a model's rest pose when the user gives none, mm: a figurine.
-DEFAULT_HEIGHT_MM = 60.0
+REFERENCE_HEIGHT_MM = 60.0
 #: Printed heights outside this range (mm) are unusual for a figure: the tool says so.
 USUAL_HEIGHT_MM = (10.0, 300.0)
 
@@ -111,7 +111,7 @@ class PrintFrame:
     model_height : float
         The rest pose's height along ``up`` in the model's units.
     how : str
-        ``"default"`` (:data:`DEFAULT_HEIGHT_MM`), ``"height"`` (the user's
+        ``"default"`` (:data:`REFERENCE_HEIGHT_MM`), ``"height"`` (the user's
         ``--height-mm``) or ``"units"`` (``--keep-units``).
     unit : str
         The model's unit as far as it is known: ``"mm"`` (a glTF asset, whose
@@ -209,7 +209,7 @@ def print_frame(vertices: np.ndarray, up, height_mm: float | None = None, keep_u
     up : (d,) float64
         Unit printing direction.
     height_mm : float, optional
-        Print the rest pose this tall (default :data:`DEFAULT_HEIGHT_MM`).
+        Print the rest pose this tall (default :data:`REFERENCE_HEIGHT_MM`).
     keep_units : bool
         Keep the model's units as millimetres (scale 1); not with ``height_mm``.
     unit : str
@@ -236,7 +236,7 @@ def print_frame(vertices: np.ndarray, up, height_mm: float | None = None, keep_u
         return PrintFrame(u, 1.0, extent, extent, "units", unit)
     if keep_units:
         return PrintFrame(u, 1.0, extent, extent, "units", unit)
-    height = DEFAULT_HEIGHT_MM if height_mm is None else float(height_mm)
+    height = REFERENCE_HEIGHT_MM if height_mm is None else float(height_mm)
     if not (np.isfinite(height) and height > 0):
         raise InputError(None, f"the printed height must be a positive number of mm, got {height_mm!r}")
     return PrintFrame(u, height / extent, height, extent, "default" if height_mm is None else "height", unit)

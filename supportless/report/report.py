@@ -22,11 +22,11 @@ from ..energies.overhang import overhang_energy, risky_area, risky_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
-from ..files.printframe import DEFAULT_HEIGHT_MM, PrintFrame, rig_print_frame
+from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
 from ..search.orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
-__all__ = ["PREDICTION_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
+__all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
            "support_headline", "write_pictures"]
 
 
@@ -111,10 +111,9 @@ def reduction(before: float, after: float) -> float | None:
 
 
 #: The printed height the report's predicted slicer filament is for when no print frame is given, mm.
-PREDICTION_HEIGHT_MM = DEFAULT_HEIGHT_MM
 
 
-def predicted_slicer(rig, result, height_mm: float = PREDICTION_HEIGHT_MM) -> dict | None:
+def predicted_slicer(rig, result, height_mm: float = REFERENCE_HEIGHT_MM) -> dict | None:
     """PrusaSlicer's support filament for the rest pose and the found pose, as the slicer model predicts it.
 
     Parameters

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..base.geometry import place_on_plate
 from ..energies.slicer_model import predicted_support_mm
-from ..files.printframe import DEFAULT_HEIGHT_MM
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .result import PoseResult, measured_at
@@ -194,7 +194,7 @@ def pool_of(result: PoseResult, kind: str) -> dict:
 
 
 def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
-                      height_mm: float = DEFAULT_HEIGHT_MM) -> tuple[list[Candidate], float]:
+                      height_mm: float = REFERENCE_HEIGHT_MM) -> tuple[list[Candidate], float]:
     """The distinct answers of each kind, measured with the objective and the slicer model.
 
     Parameters
@@ -294,7 +294,7 @@ def choose_by_model(predicted_mm: np.ndarray, values: np.ndarray, rest_mm: float
 
 
 def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: float = PREDICTION_TOLERANCE,
-           height_mm: float = DEFAULT_HEIGHT_MM) -> PoseResult:
+           height_mm: float = REFERENCE_HEIGHT_MM) -> PoseResult:
     """The answer with the least predicted support among the search's best and the simpler answers.
 
     Parameters

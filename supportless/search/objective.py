@@ -35,6 +35,8 @@ from ..energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
 from ..energies.overhang import overhang_energy
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
+from ..files.printer import SEARCH_OVERHANG_ANGLE
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .prior import PosePrior
 from .standing import Standing
@@ -65,7 +67,7 @@ SEARCH_WEIGHT_FLOOR = 1e-4
 POSE_CHUNK = 256
 
 #: Printed height (mm) at which the ``slicer`` overhang model measures a pose (as the report does).
-SLICER_MODEL_HEIGHT_MM = 60.0
+SLICER_MODEL_HEIGHT_MM = REFERENCE_HEIGHT_MM
 
 
 def distortion(terms: dict, w_arap: float, w_prior: float):
@@ -137,7 +139,7 @@ class Objective:
     """
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
-                 w_intersect: float = W_INTERSECT, overhang_angle: float = 45.0, overhang_model: str = "prism",
+                 w_intersect: float = W_INTERSECT, overhang_angle: float = SEARCH_OVERHANG_ANGLE, overhang_model: str = "prism",
                  clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..energies.overhang import overhang_energy
+from ..files.printer import SEARCH_OVERHANG_ANGLE
 
 __all__ = ["candidate_ups", "orientation_params", "print_direction", "rank_ups", "rotation_between",
            "rotation_axis_angle", "rotations_from_params", "seed_params", "tangent_basis"]
@@ -96,7 +97,7 @@ def candidate_ups(vertices: np.ndarray, faces: np.ndarray, hull_faces: int = 24,
     return _dedupe(np.vstack([axes, -hull_down, -cluster_down]), min_angle_deg)
 
 
-def rank_ups(vertices: np.ndarray, faces: np.ndarray, ups: np.ndarray, overhang_angle: float = 45.0) -> np.ndarray:
+def rank_ups(vertices: np.ndarray, faces: np.ndarray, ups: np.ndarray, overhang_angle: float = SEARCH_OVERHANG_ANGLE) -> np.ndarray:
     """Support estimate of a surface printed along each direction.
 
     Parameters
@@ -242,7 +243,7 @@ def rotation_axis_angle(R: np.ndarray) -> tuple[np.ndarray | None, float]:
 
 
 def seed_params(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, count: int,
-                overhang_angle: float = 45.0) -> np.ndarray:
+                overhang_angle: float = SEARCH_OVERHANG_ANGLE) -> np.ndarray:
     """Orientation variables of the ``count`` best candidate directions at a pose.
 
     Parameters

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..base.errors import InputError
-from ..files.printer import default_profile
+from ..energies.raygrid import DEFAULT_RESOLUTION
+from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
 from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
@@ -36,20 +37,6 @@ class _Auto:
 #: ``SearchSettings.replace(name=AUTO)`` sets ``name`` to ``None``: the value the tool chooses.
 AUTO = _Auto()
 
-#: The printer's overhang threshold when no profile is given: PrusaSlicer's
-#: defaults, whose automatic threshold is 53.1 degrees
-#: (:func:`supportless.files.printer.overhang_threshold`).
-DEFAULT_OVERHANG_ANGLE = default_profile().overhang_angle
-
-#: Degrees added to the printer's threshold during the search. A search that
-#: counts faces as risky only up to the threshold parks them just past it,
-#: where a slicer working layer by layer still supports some of them. The
-#: margin used to be 10 degrees on a 45-degree threshold: most of that was the
-#: gap to PrusaSlicer's real (automatic) threshold of 53.1 degrees, which the
-#: threshold now follows from the profile; 2 degrees remain, so the default
-#: search counts faces up to 55.1 degrees as before (55).
-OVERHANG_MARGIN = 2.0
-
 #: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
 #: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
 #: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
@@ -63,9 +50,6 @@ ORIENT_MODES = ("free", "keep")
 #: prism estimate at the rest pose). See benchmarks/RESULTS.md, "Pose and
 #: orientation".
 ORIENT_SEEDS = 4
-
-#: The steepest threshold the search uses, degrees (90 would count vertical walls).
-MAX_SEARCH_ANGLE = 89.0
 
 #: The largest swarm and the most iterations a search takes (5000 particles measure the bunny in
 #: about 300 MB; more is a mistake or an attack on the browser app, not a better search).
@@ -215,7 +199,7 @@ class SearchSettings:
     support_floor: float = 0.0
     minor_share: float = MINOR_SHARE
     clusters: int | None = 100
-    resolution: int = 192
+    resolution: int = DEFAULT_RESOLUTION
     backend: str = "fast"
 
     def __post_init__(self):
@@ -274,7 +258,7 @@ class SearchSettings:
         """
         if self.overhang_model == "slicer":
             return self.overhang_angle
-        return min(self.overhang_angle + self.overhang_margin, MAX_SEARCH_ANGLE)
+        return search_angle(self.overhang_angle, self.overhang_margin)
 
     def replace(self, **changes) -> SearchSettings:
         """A copy with some settings changed: ``None`` leaves a setting as it is, :data:`AUTO` sets it to ``None``.
@@ -341,6 +325,18 @@ class SearchSettings:
     def fixed_bones(self, rig: Rig) -> np.ndarray:
         """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
         return resolve_fixed_bones(rig, self.fix, self.free, self.minor_share) | (self.joint_limits(rig) == 0.0)
+
+    def all_fixed(self, rig: Rig) -> str | None:
+        """Why no bone of ``rig`` may move under these settings, or None when some may.
+
+        With ``orient="keep"`` there is then nothing to search; with
+        ``"free"`` the search only turns the model. Raises as
+        :meth:`fixed_bones` for a bad ``fix``/``free``.
+        """
+        if not self.fixed_bones(rig).all():
+            return None
+        return (f"every bone of {rig.name} is fixed ({int(rig.anchored_bones.sum())} of {rig.bone_count} rest on the "
+                "build plate or join bones that do)")
 
     def to_dict(self) -> dict:
         """The settings as JSON-ready values, plus the derived ``search_overhang_angle``."""

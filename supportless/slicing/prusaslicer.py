@@ -34,7 +34,7 @@ from ..base.errors import InputError, SlicerError
 from ..base.scratch import scratch_dir
 from ..files.meshes import check_mesh_arrays, read_mesh, write_mesh
 from ..files.printer import DEFAULT_DENSITY, PrinterProfile
-from ..files.printframe import place_vertices, rotation_to_z
+from ..files.printframe import REFERENCE_HEIGHT_MM, place_vertices, rotation_to_z
 from ..report.report import reduction
 from .gcode import (
     FILAMENT_DIAMETER_MM,
@@ -332,7 +332,7 @@ class SliceReport:
     filament_density: float = 1.24
     profile: str = ""
     up: list[float] = field(default_factory=lambda: [0.0, 1.0, 0.0])
-    height_mm: float = 60.0
+    height_mm: float = REFERENCE_HEIGHT_MM
     scale: float = 1.0
     size_mm_before: list[float] = field(default_factory=list)
     size_mm_after: list[float] = field(default_factory=list)
@@ -503,7 +503,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
     return SupportSlices(meshes=out, slicer=exe, config=cfg)
 
 
-def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float | None = 60.0,
+def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float | None = REFERENCE_HEIGHT_MM,
                 timeout: float = DEFAULT_TIMEOUT_S, *, config: Mapping[str, str] | str | None = None,
                 workers: int | None = None, slicer: str | None = None,
                 keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None) -> SliceReport:

@@ -22,7 +22,7 @@ from typing import Callable
 import numpy as np
 
 from ..files.printer import PrinterProfile
-from ..files.printframe import DEFAULT_HEIGHT_MM
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from ..search.choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from ..search.optimizer import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
@@ -93,7 +93,7 @@ def to_slice(choice: Choice, count: int, window: float = SLICE_WINDOW) -> list[i
     return picked
 
 
-def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = DEFAULT_HEIGHT_MM,
+def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = REFERENCE_HEIGHT_MM,
                  profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
                  slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S, window: float = SLICE_WINDOW,
                  per_kind: int = PER_KIND, slice_fn: Callable[..., object] | None = None) -> PoseResult:
@@ -214,7 +214,7 @@ def distinct_poses(rig: Rig, result: PoseResult, count: int, min_degrees: float 
     return [result] + [measured_at(rig, result, cand["angles"][i], cand["rotations"][i]) for i in picked[1:]]
 
 
-def slice_choice_if_found(rig: Rig, result: PoseResult, height_mm: float = DEFAULT_HEIGHT_MM,
+def slice_choice_if_found(rig: Rig, result: PoseResult, height_mm: float = REFERENCE_HEIGHT_MM,
                           on_failure: Callable[[str], None] | None = None) -> PoseResult:
     """:func:`slice_choice` with :data:`SLICE_RANK` answers when PrusaSlicer is found, as the default makes it.
 

@@ -633,9 +633,9 @@ class EditorState:
         if self.optimizing:
             return False
         settings = self.settings.replace(**overrides)
-        fixed = settings.fixed_bones(self.rig)
-        if fixed.all() and settings.orient == "keep":
-            raise ValueError("every bone is fixed: free some bones (e.g. Free bones: all), "
+        why = settings.all_fixed(self.rig)
+        if why and settings.orient == "keep":
+            raise ValueError(f"{why}: free some bones (e.g. Free bones: all), "
                              "or let the search turn the model (Orientation: free)")
         objective = self._objective_for(settings)
         self._cancel.clear()
@@ -643,8 +643,8 @@ class EditorState:
             self.history.record((self._angles, self._rotation))
             start = self._angles.copy()
             start_rotation = self._rotation.copy()
-            self.progress = {"iteration": 0, "iterations": settings.iterations, "value": None,
-                             "running": True, "cancelled": False, "free_bones": int((~fixed).sum())}
+            self.progress = {"iteration": 0, "iterations": settings.iterations, "value": None, "running": True,
+                             "cancelled": False, "free_bones": int((~settings.fixed_bones(self.rig)).sum())}
         self.search_settings = settings
         self._search = threading.Thread(target=self._run_search, args=(settings, objective, start, start_rotation),
                                         name="supportless-ui-search", daemon=True)
