@@ -90,12 +90,12 @@ def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder,
 
 
 def test_a_model_that_fails_midway_leaves_no_folder_that_looks_finished(folder, tmp_path, monkeypatch):
-    import supportless.report.report as report
+    import supportless.report.outputs as outputs
 
     def crash(*args, **kwargs):
         raise RuntimeError("disk went away")
 
-    monkeypatch.setattr(report, "write_pictures", crash)  # after the mesh and the pose are written
+    monkeypatch.setattr(outputs, "write_pictures", crash)  # after the mesh and the pose are written
     out = tmp_path / "out"
     out.mkdir()
     spec = next(s for s in find_models(folder) if s.name == "branch")

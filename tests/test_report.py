@@ -137,3 +137,26 @@ def test_report_predicts_the_slicers_support_at_60_mm(branch_rig, searched):
     assert p["before_mm"] > p["after_mm"] > 0  # the cantilever's support falls
     assert rep["predicted_slicer_reduction"] == pytest.approx(1 - found / rest)
     json.dumps(rep)
+
+
+def test_one_writer_of_a_results_files_goes_on_past_a_file_it_cannot_write(branch_rig, searched, tmp_path):
+    """write_result writes what is asked (the mesh in the print frame, the pose, the report) and names what failed."""
+    from supportless.files.posefile import read_pose
+    from supportless.files.printframe import rig_print_frame
+    from supportless.report.outputs import write_result
+
+    frame = rig_print_frame(branch_rig, None)
+    report = build_report(branch_rig, searched, frame)
+    (tmp_path / "taken").write_text("a file where a folder should be")
+    written, failed = write_result(branch_rig, searched, report, frame, output=tmp_path / "p.stl",
+                                   pose=tmp_path / "p.json", pictures=tmp_path / "taken" / "pics",
+                                   report_path=tmp_path / "r.json")
+    assert [what for what, _ in written] == ["posed mesh, as printed" if searched.rotation is not None
+                                             and not np.allclose(searched.rotation, np.eye(3)) else "posed mesh",
+                                             "pose", "report"]
+    assert len(failed) == 1 and "taken" in failed[0][0] and isinstance(failed[0][1], OSError)
+    V, _ = sl.read_mesh(tmp_path / "p.stl")
+    assert V[:, 2].min() == pytest.approx(0.0, abs=1e-4)  # on the plate, +Z up
+    assert V[:, 2].max() - V[:, 2].min() > 1.0  # millimetres, not the model's units
+    np.testing.assert_allclose(read_pose(tmp_path / "p.json", branch_rig.bones, branch_rig.tree), searched.angles,
+                               atol=1e-9)

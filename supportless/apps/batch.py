@@ -227,10 +227,9 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
 
 
 def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cache_dir, slice_check) -> dict:
-    from ..files.meshes import write_mesh
-    from ..files.posefile import write_pose
     from ..files.printframe import rig_print_frame
-    from ..report.report import build_report, support_headline, write_pictures
+    from ..report.outputs import write_result
+    from ..report.report import build_report, support_headline
     from ..rig.rig import load_rig
     from ..search.optimizer import optimize
     from ..search.settings import SearchSettings
@@ -248,10 +247,10 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     stage("writing")
     report = build_report(rig, result, frame)
     stl = folder / f"{spec.name}.stl"
-    write_mesh(stl, frame.place(result.print_vertices), rig.faces)
-    write_pose(folder / f"{spec.name}.pose.json", result.angles, rig.bones, rig.joints, rotation=result.rotation,
-               extra={"objective": result.value, "print_frame": frame.to_dict()}, tree=rig.tree)
-    write_pictures(folder, rig, result, report)
+    _, failed = write_result(rig, result, report, frame, output=stl, pose=folder / f"{spec.name}.pose.json",
+                             pictures=folder)  # the report last, with the slicer's figures
+    if failed:
+        raise failed[0][1]
     predicted = report.get("predicted_slicer") or {}
     row = {"model": spec.name, "status": "ok", "reason": "",
            "predicted_before_mm": predicted.get("before_mm"), "predicted_after_mm": predicted.get("after_mm"),

@@ -180,50 +180,17 @@ def _summary_table(report: dict, verbose: bool = False):
 
 
 def _write_outputs(rig, result, report, output, pose, report_path, pictures, frame, upright=None):
-    """Write the posed mesh (print orientation), the upright mesh, the pose, the pictures and the report.
-
-    Meshes are written in the print frame ``frame`` (+Z up, mm, on the plate);
-    a glTF asset stays glTF. A file that cannot be written is one line on
-    stderr; the others are still written. Returns ([(label, path)] written,
-    number that failed).
-    """
+    """Write the result's files (:func:`supportless.report.outputs.write_result`); a file that cannot be
+    written is one line on stderr. Returns ([(label, path)] written, number that failed)."""
     from ..base.crash import stage
-    from ..files.meshes import write_json
-    from ..files.posefile import write_pose
-    from ..report.report import write_pictures
+    from ..report.outputs import write_result
 
     stage("writing")
-
-    def posed(path, vertices, standing_label=False):
-        kind = _write_posed(path, rig, result.angles, result.vertices, vertices, frame)
-        return [(f"posed {kind.replace('as printed', 'standing') if standing_label else kind}", path)]
-
-    def pose_file():
-        extra = {"objective": result.value, "print_frame": frame.to_dict()}
-        if rig.labels is not None:
-            extra["bone_names"] = rig.bone_names()
-        write_pose(pose, result.angles, rig.bones, rig.joints, extra=extra, rotation=result.rotation, tree=rig.tree)
-        return [("pose", pose)]
-
-    def report_file():
-        write_json(report_path, report)
-        return [("report", report_path)]
-
-    steps = [(output, lambda: posed(output, result.print_vertices)),
-             (upright, lambda: posed(upright, result.vertices, standing_label=True)),
-             (pose, pose_file), (pictures, lambda: write_pictures(pictures, rig, result, report)),
-             (report_path, report_file)]
-    written, failed = [], 0
-    for path, write in steps:
-        if not path:
-            continue
-        try:
-            written += write()
-        except OSError as exc:
-            failed += 1
-            reason = exc.strerror or str(exc)
-            click.echo(f"supportless: error: {exc.filename or path}: cannot write: {reason}", err=True)
-    return written, failed
+    written, failed = write_result(rig, result, report, frame, output=output, upright=upright, pose=pose,
+                                   pictures=pictures, report_path=report_path)
+    for path, exc in failed:
+        click.echo(f"supportless: error: {path}: cannot write: {exc.strerror or exc}", err=True)
+    return written, len(failed)
 
 
 def _inputs(model, skeleton=None, tets=None, weights=None, *more):
@@ -447,6 +414,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
     """
     from ..base.geometry import place_on_plate, print_pose
     from ..files.posefile import read_pose, read_pose_print_frame, read_print_rotation
+    from ..report.outputs import write_posed
 
     for path in (output, upright_out):
         _check_mesh_path(path)
@@ -466,7 +434,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
     for path, printed in ((output, True), (upright_out, False)):
         if path:
             try:
-                _write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing,
+                write_posed(path, rig, angles, standing, print_pose(standing, R, rig.up) if printed else standing,
                              frame)
             except OSError as exc:  # a full disk, a folder not writable: one line, as optimize says it
                 failed += 1
@@ -476,28 +444,6 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
             click.echo(f"wrote {path}")
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
-
-
-def _write_posed(path, rig, angles, standing, vertices, frame) -> str:
-    """Write a posed model: the posed asset for a glTF rig written as .glb/.gltf, else the mesh ``vertices``.
-
-    A mesh file is written in the print frame ``frame`` (+Z up, mm, on the
-    plate, centred); a .glb of a mesh that came without glTF in glTF's own
-    frame (+Y up, metres). Returns what was written ("asset, standing" or
-    "mesh, as printed"/"mesh").
-    """
-    from ..files.gltf import is_gltf, posed_joint_transforms, write_posed_gltf
-    from ..files.meshes import write_mesh
-
-    source = rig.info.get("gltf")
-    if source is not None and is_gltf(path):
-        offset = (standing - rig.pose(angles))[0]
-        T = posed_joint_transforms(rig.transforms(angles), np.asarray(source["driver"]), source["scale"], offset)
-        write_posed_gltf(source["path"], path, T, np.asarray(source["joint_nodes"]))
-        return "glTF asset, standing (its skin posed)"
-    placed = frame.to_gltf(vertices) if is_gltf(path) and rig.dim == 3 else frame.place(vertices)
-    write_mesh(path, placed, rig.faces)
-    return "mesh, as printed" if vertices is not standing else "mesh"
 
 
 def _check_mesh_path(path) -> None:
