@@ -123,6 +123,13 @@ def test_imports_point_down_the_stages(name):
         assert stage_of(target) <= stage_of(name), f"{name} imports {target}, a later stage"
 
 
+def test_the_tests_mirror_the_stage_folders():
+    tests = PACKAGE.parent / "tests"
+    folders = sorted(p.name for p in tests.iterdir() if p.is_dir() and any(p.glob("test_*.py")))
+    assert folders and set(folders) <= set(FOLDERS), folders
+    assert not [p.name for p in tests.glob("test_*.py") if p.name != "test_architecture.py"], "tests beside the folders"
+
+
 def folder_summary(folder: str) -> str:
     """The first line of a stage folder's ``__init__`` docstring."""
     doc = ast.get_docstring(ast.parse((PACKAGE / folder / "__init__.py").read_text()))

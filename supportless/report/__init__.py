@@ -1,5 +1,6 @@
 """What a result is worth, in numbers and pictures.
 
 * :mod:`.report`: measures of a pose (support, distortion, crossings) and the JSON report;
-* :mod:`.render`: before/after pictures, convergence plots.
+* :mod:`.render`: before/after pictures, convergence plots;
+* :mod:`.outputs`: the one writer of a result's files (mesh, pose, pictures, report).
 """

@@ -23,6 +23,7 @@ from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
 from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
+from ..search.naturalness import naturalness
 from ..search.orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
@@ -225,6 +226,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "angles_deg": np.degrees(result.angles).round(4).tolist(),
         "runtime_seconds": float(result.runtime_seconds),
         "choice": None if result.choice is None else result.choice.to_dict(),
+        "naturalness": naturalness(rig, result.angles),
         "interrupted": bool(result.interrupted),
         "settings": result.settings.to_dict() | {"fixed_bones": [int(b) + 1 for b in np.flatnonzero(result.fixed)]},
         "history": [float(v) for v in result.history],

@@ -9,6 +9,7 @@
 * :mod:`.swarm`: the optimisers (particle swarm, CMA-ES), batched over a generation;
 * :mod:`.optimizer`: :func:`optimize`: the proxy, the phases, the exact gate, the polish;
 * :mod:`.result`: :class:`PoseResult`, measured on the full surface and gated as written;
+* :mod:`.naturalness`: how natural a pose looks, in numbers (chain-end turns, mirror error);
 * :mod:`.candidates`: distinct good poses; :mod:`.choice`: the answer with the least
   predicted support among pose, turn, and both.
 """

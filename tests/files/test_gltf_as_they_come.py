@@ -114,6 +114,7 @@ def rolled(F):
     return np.stack([F[np.arange(len(F)), (k + i) % 3] for i in range(3)], axis=1)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("compress", [draco_copy, meshopt_copy], ids=["draco", "meshopt"])
 def test_a_compressed_asset_reads_as_its_plain_twin(tmp_path, cache, compress):
     plain = write_gltf(character(), tmp_path / "plain.glb")

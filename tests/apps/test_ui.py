@@ -24,7 +24,7 @@ from supportless.rig.rig import load_rig
 from supportless.search.orientation import rotation_between
 from supportless.search.settings import SearchSettings
 
-ARTIFACTS = Path(__file__).resolve().parent.parent / "test-artifacts"
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 
 def _until(condition, timeout: float = 300.0) -> bool:
@@ -282,6 +282,7 @@ def test_export_mesh_on_the_plate(app, rig, tmp_path):
     assert "unknown output format" in app.status
 
 
+@pytest.mark.slow
 def test_optimize_in_background_and_cancel(app, rig):
     app.reset()
     app.wait_idle()
@@ -364,6 +365,7 @@ def _number(text: str, label: str) -> float:
     return float(m.group(1))
 
 
+@pytest.mark.slow
 def test_page_in_chromium(rig, tmp_path, chromium):
     sync_playwright = _playwright()
     app = App(rig, verbose=False, workdir=tmp_path)

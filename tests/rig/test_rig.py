@@ -450,6 +450,7 @@ def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
     np.testing.assert_array_equal(back.coarse_faces, rig.coarse_faces)
 
 
+@pytest.mark.slow
 def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branch):
     rig, _ = dense_branch
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep")

@@ -173,6 +173,7 @@ def crossing_boxes():
     return np.vstack([V1, V2]), np.vstack([F1, F2 + len(V1)])
 
 
+@pytest.mark.slow
 def test_the_winding_number_surface_of_crossing_shells_is_their_union_closed_and_clean():
     from supportless.files.printbody import WINDING_CELLS, winding_surface
 

@@ -118,6 +118,7 @@ def test_a_keep_search_is_ranked_among_its_own_distinct_poses(branch_rig):
     np.testing.assert_allclose(chosen.rotation, np.eye(3))
 
 
+@pytest.mark.slow
 def test_slice_choice_with_the_real_slicer_keeps_what_it_measures_cheapest(branch_rig, found, prusa_slicer):
     """Integration: PrusaSlicer slices the answers; the chosen one has the least support it measured (or the
     model's choice within the noise), and slicing it again gives the same figure."""

@@ -72,6 +72,7 @@ def test_a_config_exported_by_prusaslicer_is_read(prusa_slicer, tmp_path):
     assert len(p.raw) > 100 and p.overhang_angle == 31.0 and p.layer_height == 0.2
 
 
+@pytest.mark.slow
 def test_cli_search_threshold_follows_the_profile(tmp_path):
     """--printer-profile sets the report's threshold and the search's (threshold + margin)."""
     from click.testing import CliRunner

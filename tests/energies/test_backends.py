@@ -38,29 +38,34 @@ def _compare(rig, A, overhang_model="prism"):
     return rf
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("overhang_model", ["prism", "column"])
 def test_branch_backends_agree(branch_rig, overhang_model):
     raw = _compare(branch_rig, _poses(branch_rig, 6, 0), overhang_model)
     assert np.all(raw["overhang"] > 0)
 
 
+@pytest.mark.slow
 def test_tpose_backends_agree(tpose_rig):
     raw = _compare(tpose_rig, _poses(tpose_rig, 5, 10))
     assert np.any(raw["intersection"] > 0), "no self-intersecting pose: the comparison would be vacuous"
 
 
+@pytest.mark.slow
 def test_tpose_single_pose_and_column(tpose_rig):
     A = _poses(tpose_rig, 2, 20)
     _compare(tpose_rig, A[0])
     _compare(tpose_rig, A, overhang_model="column")
 
 
+@pytest.mark.slow
 def test_planar_figure_backends_agree(rig_cache_dir):
     rig = sl.load_rig("demo:woody2d", up="y", cache_dir=rig_cache_dir)
     _compare(rig, _poses(rig, 4, 30))
     _compare(rig, _poses(rig, 2, 40), overhang_model="column")
 
 
+@pytest.mark.slow
 def test_bunny_backends_agree(bunny_rig):
     raw = _compare(bunny_rig, _poses(bunny_rig, 3, 50))
     assert np.any(raw["intersection"] > 0), "no self-intersecting pose: the comparison would be vacuous"
@@ -84,6 +89,7 @@ def test_unknown_backend_raises(branch_rig):
         self_intersection_volume(branch_rig.vertices, branch_rig.faces, branch_rig.up, backend="cuda")
 
 
+@pytest.mark.slow
 def test_short_search_same_on_both_backends(branch_rig):
     kw = dict(particles=12, iterations=3, seed=3, exact_intersections=False)
     fast = sl.optimize(branch_rig, objective=sl.Objective(branch_rig, backend="fast"), **kw)

@@ -366,6 +366,7 @@ def _demo_meshes(tmp_path):
     return tmp_path / "rest.stl", tmp_path / "posed.stl"
 
 
+@pytest.mark.slow
 def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     from click.testing import CliRunner
 

@@ -133,6 +133,7 @@ def tiny_files(tmp_path_factory):
     return folder, files
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,up", [("yup.obj", "y"), ("zup.stl", "z")])
 def test_optimize_and_apply_write_z_up_millimetre_files_at_the_default_size(tiny_files, name, up, tmp_path):
     folder, files = tiny_files
@@ -199,6 +200,7 @@ def test_height_and_keep_units_choose_the_printed_size(tiny_files, tmp_path):
     assert not (tmp_path / "both.stl").exists()
 
 
+@pytest.mark.slow
 def test_the_summary_leads_with_the_reports_support_line(tpose_rig, tmp_path):
     res = run("optimize", "demo:tpose", "--particles", 8, "--iterations", 3, "--seed", 0, "-q",
               "-o", tmp_path / "t.stl", "--report", tmp_path / "r.json")
@@ -227,6 +229,7 @@ def test_the_progress_total_never_changes(tpose_rig):
     assert [p for _, _, p in seen][0] == "pose" and seen[-1][2] == "pose and turn"
 
 
+@pytest.mark.slow
 def test_slice_check_measures_the_written_file_itself(prusa_slicer, tiny_files, tmp_path):
     from supportless.slicing.prusaslicer import slice_support
 

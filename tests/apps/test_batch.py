@@ -67,6 +67,7 @@ def test_meshes_sharing_a_name_are_one_failed_model(folder):
     assert len(specs) == 1 and "arm.obj" in specs[0].problem and "arm.stl" in specs[0].problem
 
 
+@pytest.mark.slow
 def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path):
     from supportless.apps.cli import main
 
@@ -111,6 +112,7 @@ def _free_port():
         return s.getsockname()[1]
 
 
+@pytest.mark.slow
 def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
     dask = Path(sys.executable).with_name("dask")
     port = _free_port()
@@ -141,6 +143,7 @@ def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
                     p.kill()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("point", ["rename arm/", "rename branch/", "rename contact_sheet.png",
                                    "rename summary.csv"])
 def test_killing_a_run_at_each_step_leaves_no_model_that_looks_finished(folder, tmp_path, point):

@@ -704,6 +704,7 @@ def test_a_sparse_position_accessor_is_substituted(tmp_path, cache):
     np.testing.assert_array_equal(load(sparse, cache).vertices, load(dense, cache).vertices)
 
 
+@pytest.mark.slow
 def test_a_stored_pose_unlike_the_bind_pose_is_the_rest_pose_a_viewer_shows(tmp_path, cache):
     pose = {"J0": Rotation.from_euler("x", 20, degrees=True).as_quat(),
             "J1": Rotation.from_euler("z", 40, degrees=True).as_quat(),
@@ -948,6 +949,7 @@ def test_cli_optimize_and_apply_a_glb(tmp_path):
     # (the body is remade from its winding number) and hide many vertices inside
     ("RobotExpressive.glb", 49, ["PoleTarget.L", "PoleTarget.R"], 0.3),
 ])
+@pytest.mark.slow
 def test_shared_asset(shared_file, tmp_path, name, bones, pruned, on_body):
     path = shared_file(f"gltf/{name}")
     rig = load_rig(path, height_mm=60, cache_dir=tmp_path / "cache")
@@ -1018,6 +1020,7 @@ def test_a_gltf_with_an_external_bin_is_posed_into_a_glb(tmp_path, cache):
     assert check_posed_file(rig, out, angles, path) > 0
 
 
+@pytest.mark.slow
 def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, monkeypatch):
     """Over the proxy threshold a glTF rig gets a simplified volume and search surface; answers stay full size."""
     from supportless.rig import rig as rig_mod

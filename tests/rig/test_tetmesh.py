@@ -66,6 +66,7 @@ def test_a_surface_that_cuts_itself_still_gets_a_volume_mesh_with_its_vertices_f
     np.testing.assert_allclose(vol.sum(), 2.5, rtol=0.03)
 
 
+@pytest.mark.slow
 def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
     """OBJ + TGF of two boxes pushed through each other: TetGen refuses, the winding-number surface is meshed."""
     from supportless.copyleft.cgal import intersecting_face_pairs
@@ -86,6 +87,7 @@ def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
     assert same[0] is Vb and same[4] is None
 
 
+@pytest.mark.slow
 def test_prepare_rig_of_a_crossing_surface_says_so_and_is_clean():
     import supportless as sl
     from supportless.copyleft.cgal import intersecting_face_pairs

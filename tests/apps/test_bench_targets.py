@@ -1,9 +1,12 @@
 """``supportless bench --targets``: the speed cases, their table and what happens without the shared data."""
 
+import pytest
+
 import supportless as sl
 from supportless.apps import bench_targets as bt
 
 
+@pytest.mark.slow
 def test_a_case_is_measured_against_its_full_resolution_reference(dense_branch, monkeypatch):
     rig = dense_branch[0]  # a rig with a proxy (conftest.py)
     monkeypatch.setattr(bt, "_prepare", lambda case, cache: rig)

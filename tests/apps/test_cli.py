@@ -73,6 +73,7 @@ def test_prepare_finds_the_skeleton_beside_the_model(branch_files):
     assert "3 bones" in result.stdout
 
 
+@pytest.mark.slow
 def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
     out, result = optimized
     assert result.exit_code == 0, (result.output, result.exception)
@@ -99,6 +100,7 @@ def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
     assert sorted(p.name for p in out.iterdir()) == ["pictures", "pose.json", "posed.obj", "report.json"]
 
 
+@pytest.mark.slow
 def test_optimize_is_reproducible_with_a_seed(optimized, branch_files, tmp_path):
     out, _ = optimized
     again = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
@@ -138,6 +140,7 @@ def test_demo_2d(tmp_path):
     assert report["dimension"] == 2
 
 
+@pytest.mark.slow
 def test_demo_3d_writes_every_file(tmp_path, prusa_slicer):
     """The README's first command, on a small swarm: mesh, skeleton, pose, report, pictures, slicer figures."""
     out = tmp_path / "demo"
@@ -229,6 +232,7 @@ def test_ctrl_c_during_the_search_writes_complete_outputs_and_exits_130(branch_f
     assert signal.getsignal(signal.SIGINT) is handler  # the usual Ctrl-C is back
 
 
+@pytest.mark.slow
 def test_search_options_reach_the_search(branch_files, tmp_path):
     """--overhang-model, --free all and the weights end up in the report's settings and change the search."""
     base = ("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
@@ -322,6 +326,7 @@ def test_real_executable_prints_one_line(tmp_path):
     assert proc.stdout == ""
 
 
+@pytest.mark.slow
 def test_print_rotation_round_trips_through_apply(branch_files, tmp_path):
     """`optimize -o` writes the pose as printed, `--upright-out` standing; `apply` reproduces both from the pose file."""
     common = [branch_files["mesh"], "--cache-dir", branch_files["cache"]]
@@ -443,6 +448,7 @@ def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(br
     assert sorted(p.name for p in tmp_path.iterdir()) == ["posed.stl", "report.json"]
 
 
+@pytest.mark.slow
 def test_a_closed_stdout_loses_nothing(branch_files, tmp_path):
     """``supportless optimize ... | head -1``: the files are written and the exit status is 0."""
     import subprocess

@@ -160,3 +160,11 @@ def test_one_writer_of_a_results_files_goes_on_past_a_file_it_cannot_write(branc
     assert V[:, 2].max() - V[:, 2].min() > 1.0  # millimetres, not the model's units
     np.testing.assert_allclose(read_pose(tmp_path / "p.json", branch_rig.bones, branch_rig.tree), searched.angles,
                                atol=1e-9)
+
+
+def test_the_report_gives_the_naturalness_of_the_pose(branch_rig, searched):
+    from supportless.search.naturalness import world_turn_deg
+
+    n = build_report(branch_rig, searched)["naturalness"]
+    assert n["largest_chain_turn_deg"] == pytest.approx(world_turn_deg(branch_rig, searched.angles)[n["chain_end"] - 1])
+    assert 0.0 <= n["largest_chain_turn_deg"] <= n["largest_joint_deg"] <= 180.0

@@ -7,6 +7,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import pytest
+
 import supportless
 from supportless.base.numba_cache import fallback_cache_dir, writable
 
@@ -32,6 +34,7 @@ def _read_only_copy(tmp_path):
     return target
 
 
+@pytest.mark.slow
 def test_the_package_imports_and_computes_with_no_writable_cache_place(tmp_path):
     site = _read_only_copy(tmp_path)
     home = tmp_path / "home-is-a-file"

@@ -1,0 +1,60 @@
+"""The naturalness figures: chain-end turns and the mirror error, against analytic cases."""
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless.base.kinematics import euler_to_matrix, matrix_to_euler
+from supportless.search.layout import find_mirror
+from supportless.search.naturalness import (chain_ends, mirror_error_deg, naturalness, rotation_angle_deg,
+                                            world_turn_deg)
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return sl.load_rig("demo:arm")
+
+
+def test_rotation_angle_of_known_rotations():
+    for deg in (0.0, 30.0, 90.0, 179.0):
+        a = np.radians(deg)
+        Rz = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1.0]])
+        assert rotation_angle_deg(Rz) == pytest.approx(deg, abs=1e-6)
+        assert rotation_angle_deg(Rz[:2, :2]) == pytest.approx(deg, abs=1e-9)
+    R = euler_to_matrix(np.random.default_rng(0).uniform(-1, 1, (5, 3)))
+    np.testing.assert_allclose(rotation_angle_deg(R), rotation_angle_deg(np.swapaxes(R, -1, -2)), atol=1e-9)
+
+
+def test_three_joints_at_30_degrees_in_one_plane_turn_the_chain_end_90(arm):
+    """The arm's chain root -> forearm -> hand: each joint turns 30 degrees about the plane's normal."""
+    assert set(chain_ends(arm).tolist()) == {0, 3}  # the two bones nothing hangs from
+    chain = [2, 1, 0]  # the root bone, its child, its grandchild (the end)
+    assert arm.parents[0] == 1 and arm.parents[1] == 2 and arm.parents[2] == -1
+    A = np.zeros((arm.bone_count, 3))
+    A[chain, 2] = np.radians(30.0)
+    turn = world_turn_deg(arm, A)
+    np.testing.assert_allclose(turn[chain], [30.0, 60.0, 90.0], atol=1e-9)
+    figures = naturalness(arm, A)
+    assert figures["largest_chain_turn_deg"] == pytest.approx(90.0, abs=1e-9) and figures["chain_end"] == 1
+    B = A.copy()
+    B[1, 2] = -B[1, 2]  # the middle joint the other way: the end turns back to 30 degrees
+    assert world_turn_deg(arm, B)[0] == pytest.approx(30.0, abs=1e-9)
+    np.testing.assert_allclose(world_turn_deg(arm, np.stack([A, B]))[:, 0], [90.0, 30.0], atol=1e-9)  # a batch
+
+
+def test_a_mirrored_pose_has_no_mirror_error_and_one_arm_alone_has(tpose_rig):
+    mirror = find_mirror(tpose_rig)
+    assert mirror is not None
+    rest = np.zeros((tpose_rig.bone_count, 3))
+    assert mirror_error_deg(tpose_rig, rest, mirror) == pytest.approx(0.0, abs=1e-9)
+    pairs = [p for p in range(tpose_rig.bone_count) if mirror.partner[p] != p
+             and tpose_rig.parents[p] >= 0 and mirror.partner[tpose_rig.parents[p]] == tpose_rig.parents[p]]
+    p = pairs[0]  # a bone of a pair hanging from a bone in the plane (a shoulder or a hip)
+    one = rest.copy()
+    one[p] = np.radians([10.0, 20.0, 30.0])
+    assert mirror_error_deg(tpose_rig, one, mirror) > 10.0
+    both = one.copy()
+    S = mirror.reflection
+    both[mirror.partner[p]] = matrix_to_euler(S @ euler_to_matrix(one[p]) @ S)
+    assert mirror_error_deg(tpose_rig, both, mirror) == pytest.approx(0.0, abs=1e-6)
+    assert naturalness(tpose_rig, both)["mirror_error_deg"] == pytest.approx(0.0, abs=1e-6)
