@@ -154,6 +154,8 @@ def test_the_readme_layout_is_the_stages():
     """The README's Layout block is :func:`layout_block` (print it with ``python tests/test_architecture.py``)."""
     readme = (PACKAGE.parent / "README.md").read_text()
     start = readme.index("## Layout")
+    section = readme[start: readme.index("\n## ", start + 1)]
+    assert section.count("```") == 2, "the Layout section holds one block: the stages"
     begin = readme.index("```text\n", start) + len("```text\n")
     block = readme[begin: readme.index("\n```", begin)]
     assert block == layout_block(), "the README's Layout block has drifted: paste python tests/test_architecture.py"
