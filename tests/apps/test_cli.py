@@ -433,12 +433,12 @@ def test_impossible_output_locations_are_refused_before_the_search(branch_files,
 
 def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(branch_files, tmp_path,
                                                                                monkeypatch):
-    import supportless.files.posefile as posefile
+    import supportless.report.outputs as outputs
 
     def full_disk(path, *args, **kwargs):
         raise OSError(28, "No space left on device", str(path))
 
-    monkeypatch.setattr(posefile, "write_pose", full_disk)
+    monkeypatch.setattr(outputs, "write_pose", full_disk)  # the one writer of a result's files
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
                  "--iterations", 1, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
                  "--report", tmp_path / "report.json")
@@ -495,7 +495,7 @@ def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(bra
 def test_apply_on_a_full_disk_is_one_line_and_no_file(branch_files, tmp_path, monkeypatch):
     import errno
 
-    import supportless.files.meshes as sio
+    import supportless.report.outputs as sio
     from supportless.apps.cli_common import EXIT_WRITE_FAILED
 
     def full(*args, **kwargs):
