@@ -173,6 +173,10 @@ def _search_options(f):
         click.option("--joint-limit", type=click.FloatRange(*RANGES["joint_limit"]), default=d.joint_limit,
                      show_default=True, help="Largest rotation of any joint, degrees (one angle); 0 with "
                                              "--orient free turns the model without posing it."),
+        click.option("--chain-limit", type=click.FloatRange(*RANGES["chain_limit"]), default=d.chain_limit,
+                     help="Largest turn of a chain's end (a head, a hand, a tail tip) from its rest direction, "
+                          "degrees: a limit on the whole chain, where --joint-limit bounds each joint alone "
+                          "[default: none]."),
         click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
                      help="free: choose the print orientation with the pose (-o is written turned); "
                           "keep: print the model as it stands."),

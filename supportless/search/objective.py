@@ -38,6 +38,7 @@ from ..energies.support import support_volume
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
+from .naturalness import chain_ends, rotation_angle_deg
 from .prior import PosePrior
 from .standing import Standing
 
@@ -139,11 +140,11 @@ class Objective:
     """
 
     def __init__(self, rig: Rig, w_arap: float = W_ARAP, w_overhang: float = W_OVERHANG,
-                 w_intersect: float = W_INTERSECT, overhang_angle: float = SEARCH_OVERHANG_ANGLE, overhang_model: str = "prism",
-                 clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
+                 w_intersect: float = W_INTERSECT, overhang_angle: float = SEARCH_OVERHANG_ANGLE,
+                 overhang_model: str = "prism", clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
-                 volume: float | None = None):
+                 volume: float | None = None, chain_limit: float | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -165,6 +166,8 @@ class Objective:
         if volume is not None:
             self.__dict__["volume"] = float(volume)  # fills the cached property below
         self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
+        self.chain_limit = None if chain_limit is None else float(chain_limit)
+        self._ends = chain_ends(rig)
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -251,9 +254,17 @@ class Objective:
         transforms, V = self._posed(angles)
         return self._cheap_terms(angles, transforms, V, rotations) | {"intersection": self._intersection(V)}
 
+    def chain_excess(self, transforms: np.ndarray) -> np.ndarray:
+        """How far the chain ends turn past ``chain_limit``: the sum over ends, radians, (P,) float64 (0 when off)."""
+        if self.chain_limit is None:
+            return np.zeros(transforms.shape[:-3])
+        d = self.rig.dim
+        turn = rotation_angle_deg(transforms[..., self._ends, :d, :d])
+        return np.radians(np.maximum(turn - self.chain_limit, 0.0)).sum(axis=-1)
+
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
-        violation = self.prior.excess(angles)
+        violation = self.prior.excess(angles) + self.chain_excess(transforms)
         if self.keep_standing:
             violation = violation + self.standing.violation(transforms, V)
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
@@ -393,7 +404,7 @@ class Objective:
             kept[todo] += self.w_arap * (arap[todo] / self.volume)
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
-            violation = excess[todo]
+            violation = excess[todo] + self.chain_excess(transforms[todo])
             if self.keep_standing:
                 violation = violation + self.standing.violation(transforms[todo], V[todo])
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
@@ -416,6 +427,7 @@ class Objective:
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
                 "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
+                "chain_limit": self.chain_limit,
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
                 "support_floor": self.support_floor}
 

@@ -64,6 +64,7 @@ RANGES = {
     "polish": (0, MAX_ITERATIONS),
     "seed": (0, None),
     "joint_limit": (0.0, 180.0),
+    "chain_limit": (0.0, 180.0),
     "overhang_angle": (0.0, 90.0),
     "overhang_margin": (0.0, 45.0),
     "w_arap": (0.0, None),
@@ -140,6 +141,11 @@ class SearchSettings:
         0 fixes every bone (with ``orient="free"``: turning only).
     limits : tuple of str
         Per-bone limits ``"BONE=DEGREES"`` (1-based bone numbers), e.g. ``("5=15",)``.
+    chain_limit : float, optional
+        Largest turn of a chain's end (a head, a hand, a tail tip) in the
+        world from its rest direction, degrees: a hard rule over the whole
+        chain, where ``joint_limit`` bounds each joint alone
+        (:mod:`supportless.search.naturalness`). None: no such rule.
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
@@ -191,6 +197,7 @@ class SearchSettings:
     w_prior: float = W_PRIOR
     joint_limit: float = JOINT_LIMIT
     limits: tuple = ()
+    chain_limit: float | None = None
     keep_standing: bool = True
     symmetric: bool = False
     orient: str = "free"
@@ -227,6 +234,8 @@ class SearchSettings:
             raise InputError(None, f"orient_seeds must be at least 0, not {self.orient_seeds}")
         if not _within(self.joint_limit, RANGES["joint_limit"]):
             raise InputError(None, f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
+        if self.chain_limit is not None and not _within(self.chain_limit, RANGES["chain_limit"]):
+            raise InputError(None, f"chain_limit must be within 0..180 degrees, not {self.chain_limit}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
             try:
@@ -294,7 +303,8 @@ class SearchSettings:
                          overhang_angle=self.search_overhang_angle, overhang_model=self.overhang_model,
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
-                         keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume)
+                         keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
+                         chain_limit=self.chain_limit)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.

@@ -58,3 +58,20 @@ def test_a_mirrored_pose_has_no_mirror_error_and_one_arm_alone_has(tpose_rig):
     both[mirror.partner[p]] = matrix_to_euler(S @ euler_to_matrix(one[p]) @ S)
     assert mirror_error_deg(tpose_rig, both, mirror) == pytest.approx(0.0, abs=1e-6)
     assert naturalness(tpose_rig, both)["mirror_error_deg"] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_chain_limit_rejects_a_chain_turned_past_it_and_the_search_keeps_it(arm):
+    """Three joints at 30 degrees turn the end 90: feasible under no limit, infeasible under 60 degrees."""
+    from supportless.search.objective import INFEASIBLE
+
+    A = np.zeros((arm.bone_count, 3))
+    A[[2, 1, 0], 2] = np.radians(30.0)
+    free = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",)).objective(arm)
+    limited = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",), chain_limit=60.0).objective(arm)
+    assert free.terms(A)["violation"] == pytest.approx(0.0)
+    assert limited.terms(A)["violation"] == pytest.approx(np.radians(30.0))  # the end is 30 degrees past 60
+    assert float(limited(A)) >= INFEASIBLE and float(free(A)) < INFEASIBLE
+    found = sl.optimize(arm, particles=24, iterations=8, seed=0, orient="keep", free=("all",), chain_limit=20.0)
+    assert world_turn_deg(arm, found.angles)[chain_ends(arm)].max() <= 20.0 + 1e-6
+    with pytest.raises(sl.InputError, match="chain_limit"):
+        sl.SearchSettings(chain_limit=200.0)
