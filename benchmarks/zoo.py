@@ -105,9 +105,9 @@ def _num(x, spec: str, unit: str = "") -> str:
 def table(rows: list[dict]) -> str:
     """The Markdown table of the rows that ran."""
     lines = ["| model | bones | support mm before → after (PrusaSlicer) | reduction PrusaSlicer / estimate "
-             "| distortion (arap) | largest joint rotation | stability margin | new contacts "
-             "| exact intersecting pairs | search time |",
-             "|" + "---|" * 10]
+             "| distortion (arap) | largest joint rotation | largest chain-end turn | mirror error "
+             "| stability margin | new contacts | exact intersecting pairs | search time |",
+             "|" + "---|" * 12]
     for r in rows:
         if "skipped" in r:
             continue
@@ -119,7 +119,10 @@ def table(rows: list[dict]) -> str:
         lines.append(
             f"| {r['model']} | {r['bones']} | {support} "
             f"| {sliced} / {_num(rep['reduction_percent']['support_prism'], '.1f', ' %')} "
-            f"| {after['terms']['arap']:.4f} | {r['rotation']:.0f}° | {_num(after.get('stability_margin'), '.3f')} "
+            f"| {after['terms']['arap']:.4f} | {r['rotation']:.0f}° "
+            f"| {_num(rep['naturalness']['largest_chain_turn_deg'], '.0f', '°')} "
+            f"| {_num(rep['naturalness']['mirror_error_deg'], '.0f', '°')} "
+            f"| {_num(after.get('stability_margin'), '.3f')} "
             f"| {_num(after.get('new_contact_vertices'), 'd')} | {after['intersecting_face_pairs']} "
             f"| {r['seconds']:.1f} s |")
     return "\n".join(lines)
@@ -176,11 +179,16 @@ def section(rows: list[dict], figures: list[str], settings, command: str) -> str
         HEADING,
         "",
         f"The default search (`SearchSettings()`: {settings.particles} particles × {settings.iterations} "
-        f"iterations, seed {settings.seed}, search margin {settings.overhang_margin:g}°) on every built-in 3D figure and the shared models, at commit "
+        f"iterations, seed {settings.seed}, search margin {settings.overhang_margin:g}°"
+        + (f", chain limit {settings.chain_limit:g}°" if settings.chain_limit is not None else "")
+        + ") on every built-in 3D figure and the shared models, at commit "
         f"{commit}. PrusaSlicer: its default print settings, 60 mm tall, support = filament with − without "
         "supports. Estimate = the prism support estimate (`support_prism`) of the report. Distortion = the "
         "normalised ARAP term of the found pose; largest joint rotation = the largest rotation of one bone "
-        "relative to its parent; stability margin = distance of the centre of mass inside the support polygon "
+        "relative to its parent; largest chain-end turn = how far the end of a chain (a head, a hand, a tail "
+        "tip) turned in the world from its rest direction; mirror error = how far a symmetric skeleton's pose is "
+        "from mirror images (– when it has no mirror plane); stability margin = distance of the centre of mass "
+        "inside the support polygon "
         "(fraction of the height, negative = falls over); new contacts = vertices of the found pose that touch "
         "the plate and did not before. Search time includes the exact intersection checks, not the slicing. "
         f"Machine: {platform.machine()}, {cores} cores, Python {platform.python_version()}."
@@ -220,12 +228,15 @@ def main(argv=None):
     p.add_argument("--overhang-margin", type=float, default=None,
                    help="Search margin in degrees over the threshold (default: the tool's).")
     p.add_argument("--keep", default=None, help="Folder for each model's before/after and convergence pictures.")
+    p.add_argument("--chain-limit", type=float, default=None, help="SearchSettings.chain_limit, degrees.")
     args = p.parse_args(argv)
     figures = zoo_figures()
     models = args.models or [*figures, *SHARED]
     settings = sl.SearchSettings().replace(particles=args.particles, iterations=args.iterations, seed=args.seed)
     if args.overhang_margin is not None:
         settings = settings.replace(overhang_margin=args.overhang_margin)
+    if args.chain_limit is not None:
+        settings = settings.replace(chain_limit=args.chain_limit)
     command = "python benchmarks/zoo.py " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
