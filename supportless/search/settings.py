@@ -1,8 +1,10 @@
 """What a pose search is asked to do: one frozen settings object.
 
-:class:`SearchSettings` is the single source of the search's defaults and of
-the rule that turns the printer's overhang threshold into the threshold the
-search minimises (``min(angle + margin, 89)``). It builds the
+:class:`SearchSettings` is the single source of the search's defaults, and
+:data:`RANGES` of the values each setting may take (the command line's and the
+browser app's limits too); the rule that turns the printer's overhang
+threshold into the one the search minimises is
+:func:`supportless.files.printer.search_angle`. It builds the
 :class:`~supportless.search.objective.Objective`, is stored in the report, and is
 what the command line, the browser app and the benchmarks pass around.
 
@@ -75,7 +77,7 @@ RANGES = {
 
 #: Velocity-update coefficients of the swarm. ``standard`` is the
 #: constriction-factor swarm (Clerc & Kennedy); ``libigl`` reproduces igl::pso's.
-#: The searches (:data:`supportless.search.optimizer.OPTIMIZERS`).
+#: The searches (:data:`supportless.search.swarm.OPTIMIZERS`).
 OPTIMIZER_NAMES = ("cma", "pso")
 
 PSO_PRESETS = {
@@ -121,7 +123,7 @@ class SearchSettings:
         (the default: on the zoo it reaches the lower objective more often,
         ``benchmarks/optimizers.py``); ``cma``: CMA-ES with ``particles // 5``
         samples per generation for ``iterations`` generations
-        (:func:`supportless.search.optimizer.evolution_strategy`), faster.
+        (:func:`supportless.search.swarm.evolution_strategy`), faster.
     polish : int or None
         Generations of a local CMA-ES after the swarm, from its best pose with
         small steps (:data:`supportless.search.optimizer.POLISH_SIGMA`); after a dense
