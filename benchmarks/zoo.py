@@ -181,6 +181,7 @@ def section(rows: list[dict], figures: list[str], settings, command: str) -> str
         f"The default search (`SearchSettings()`: {settings.particles} particles × {settings.iterations} "
         f"iterations, seed {settings.seed}, search margin {settings.overhang_margin:g}°"
         + (f", chain limit {settings.chain_limit:g}°" if settings.chain_limit is not None else "")
+        + (f", w_chain {settings.w_chain:g}" if settings.w_chain else "")
         + ") on every built-in 3D figure and the shared models, at commit "
         f"{commit}. PrusaSlicer: its default print settings, 60 mm tall, support = filament with − without "
         "supports. Estimate = the prism support estimate (`support_prism`) of the report. Distortion = the "
@@ -229,6 +230,7 @@ def main(argv=None):
                    help="Search margin in degrees over the threshold (default: the tool's).")
     p.add_argument("--keep", default=None, help="Folder for each model's before/after and convergence pictures.")
     p.add_argument("--chain-limit", type=float, default=None, help="SearchSettings.chain_limit, degrees.")
+    p.add_argument("--w-chain", type=float, default=None, help="SearchSettings.w_chain.")
     args = p.parse_args(argv)
     figures = zoo_figures()
     models = args.models or [*figures, *SHARED]
@@ -237,6 +239,8 @@ def main(argv=None):
         settings = settings.replace(overhang_margin=args.overhang_margin)
     if args.chain_limit is not None:
         settings = settings.replace(chain_limit=args.chain_limit)
+    if args.w_chain is not None:
+        settings = settings.replace(w_chain=args.w_chain)
     command = "python benchmarks/zoo.py " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

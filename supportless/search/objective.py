@@ -144,7 +144,7 @@ class Objective:
                  overhang_model: str = "prism", clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
-                 volume: float | None = None, chain_limit: float | None = None):
+                 volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -167,6 +167,7 @@ class Objective:
             self.__dict__["volume"] = float(volume)  # fills the cached property below
         self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
         self.chain_limit = None if chain_limit is None else float(chain_limit)
+        self.w_chain = float(w_chain)
         self._ends = chain_ends(rig)
 
     # ------------------------------------------------------------ precompute
@@ -262,13 +263,25 @@ class Objective:
         turn = rotation_angle_deg(transforms[..., self._ends, :d, :d])
         return np.radians(np.maximum(turn - self.chain_limit, 0.0)).sum(axis=-1)
 
+    def prior_cost(self, angles: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+        """The natural-pose prior: the joints' own turns (:class:`PosePrior`), plus ``w_chain`` times the
+        squared turn (radians) of each chain end in the world, summed: three joints turning one way cost
+        more than three turning different ways."""
+        cost = self.prior.cost(angles)
+        if not self.w_chain:
+            return cost
+        d = self.rig.dim
+        turn = np.radians(rotation_angle_deg(transforms[..., self._ends, :d, :d]))
+        return cost + self.w_chain * (turn ** 2).sum(axis=-1)
+
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
         violation = self.prior.excess(angles) + self.chain_excess(transforms)
         if self.keep_standing:
             violation = violation + self.standing.violation(transforms, V)
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
-                "overhang": self.overhang(V, rotations), "prior": self.prior.cost(angles), "violation": violation}
+                "overhang": self.overhang(V, rotations), "prior": self.prior_cost(angles, transforms),
+                "violation": violation}
 
     def normalise(self, raw: dict) -> dict:
         """Raw terms -> normalised terms (see the module docstring)."""
@@ -394,7 +407,7 @@ class Objective:
         transforms, V = self._posed(angles, search=True)
         # the terms in order of cost, each only for the poses the cheaper ones leave below their bound (every
         # term is >= 0, so a partial sum is a lower bound); the survivors' value is summed as combine() does
-        prior = np.asarray(self.prior.cost(angles), np.float64)
+        prior = np.asarray(self.prior_cost(angles, transforms), np.float64)
         overhang = np.asarray(self.overhang(V, rotations), np.float64)
         kept = self.w_overhang * (overhang / self.overhang_scale) + self.w_prior * prior
         todo = np.flatnonzero(kept < bound)
@@ -427,7 +440,7 @@ class Objective:
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
                 "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
-                "chain_limit": self.chain_limit,
+                "chain_limit": self.chain_limit, "w_chain": self.w_chain,
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
                 "support_floor": self.support_floor}
 

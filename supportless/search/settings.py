@@ -73,6 +73,7 @@ RANGES = {
     "w_overhang": (0.0, None),
     "w_intersect": (0.0, None),
     "w_prior": (0.0, None),
+    "w_chain": (0.0, None),
 }
 
 #: Velocity-update coefficients of the swarm. ``standard`` is the
@@ -148,6 +149,10 @@ class SearchSettings:
         world from its rest direction, degrees: a hard rule over the whole
         chain, where ``joint_limit`` bounds each joint alone
         (:mod:`supportless.search.naturalness`). None: no such rule.
+    w_chain : float
+        Weight of the chain ends' squared world turn (radians) in the
+        natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
+        0 (the default) leaves the prior to the joints' own turns.
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
@@ -200,6 +205,7 @@ class SearchSettings:
     joint_limit: float = JOINT_LIMIT
     limits: tuple = ()
     chain_limit: float | None = None
+    w_chain: float = 0.0
     keep_standing: bool = True
     symmetric: bool = False
     orient: str = "free"
@@ -246,7 +252,7 @@ class SearchSettings:
                 ok = False
             if not ok:
                 raise InputError(None, f"joint limit {item!r} is not BONE=DEGREES with 0..180 degrees, e.g. 5=15")
-        for name in ("w_arap", "w_overhang", "w_intersect", "w_prior", "support_floor", "overhang_margin"):
+        for name in ("w_arap", "w_overhang", "w_intersect", "w_prior", "w_chain", "support_floor", "overhang_margin"):
             value = float(getattr(self, name))
             if not np.isfinite(value):
                 raise InputError(None, f"{name} (--{name.replace('_', '-')}) must be a finite number, "
@@ -306,7 +312,7 @@ class SearchSettings:
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
                          keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
-                         chain_limit=self.chain_limit)
+                         chain_limit=self.chain_limit, w_chain=self.w_chain)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.

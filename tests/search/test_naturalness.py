@@ -75,3 +75,20 @@ def test_the_chain_limit_rejects_a_chain_turned_past_it_and_the_search_keeps_it(
     assert world_turn_deg(arm, found.angles)[chain_ends(arm)].max() <= 20.0 + 1e-6
     with pytest.raises(sl.InputError, match="chain_limit"):
         sl.SearchSettings(chain_limit=200.0)
+
+
+def test_the_prior_pays_for_the_accumulated_turn_of_a_chain(arm):
+    """Three joints at 30 degrees the same way cost more than the same joints turning different ways."""
+    same = np.zeros((arm.bone_count, 3))
+    same[[2, 1, 0], 2] = np.radians(30.0)
+    mixed = same.copy()
+    mixed[1, 2] = -mixed[1, 2]
+    plain = sl.SearchSettings(keep_standing=False, free=("all",)).objective(arm)
+    chained = sl.SearchSettings(keep_standing=False, free=("all",), w_chain=1.0).objective(arm)
+    assert plain.terms(same)["prior"] == pytest.approx(plain.terms(mixed)["prior"])  # per joint: the same cost
+    extra = chained.terms(same)["prior"] - plain.terms(same)["prior"]
+    ends = world_turn_deg(arm, same)[chain_ends(arm)]
+    assert extra == pytest.approx(float((np.radians(ends) ** 2).sum()), rel=1e-9)  # (pi/2)^2 for the hand
+    assert chained.terms(same)["prior"] > chained.terms(mixed)["prior"]
+    rest = np.zeros_like(same)
+    assert chained.terms(rest)["prior"] == pytest.approx(0.0, abs=1e-12)
