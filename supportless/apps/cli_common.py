@@ -177,6 +177,9 @@ def _search_options(f):
                      help="Largest turn of a chain's end (a head, a hand, a tail tip) from its rest direction, "
                           "degrees: a limit on the whole chain, where --joint-limit bounds each joint alone "
                           "[default: none]."),
+        click.option("--w-chain", type=click.FloatRange(*RANGES["w_chain"]), default=d.w_chain, show_default=True,
+                     help="Weight, inside the natural-pose prior, of how far the chains' ends turn in the world "
+                          "(three joints turning one way cost more than three turning different ways)."),
         click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
                      help="free: choose the print orientation with the pose (-o is written turned); "
                           "keep: print the model as it stands."),

@@ -540,3 +540,14 @@ def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, m
     errors = [line for line in result.stderr.splitlines() if line.startswith("supportless: error")]
     assert len(errors) == 1 and "No space left on device" in errors[0] and "free some space" in errors[0]
     assert "Traceback" not in result.output
+
+
+def test_the_chain_options_reach_the_search(branch_files, tmp_path):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
+                 "--iterations", 1, "-q", "-o", tmp_path / "p.stl", "--report", tmp_path / "r.json",
+                 "--chain-limit", 50, "--w-chain", 0.25)
+    assert result.exit_code == 0, (result.output, result.exception)
+    settings = json.loads((tmp_path / "r.json").read_text())["settings"]
+    assert settings["chain_limit"] == 50.0 and settings["w_chain"] == 0.25
+    bad = run("optimize", branch_files["mesh"], "--chain-limit", 200, "-o", tmp_path / "q.stl")
+    assert bad.exit_code == 2 and "0<=x<=180" in bad.stderr
