@@ -70,6 +70,7 @@ def _run_search(rig, console, settings, quiet=False):
 
     stage("searching")
 
+    from ..search.anatomy import joint_ranges
     from ..search.optimizer import optimize
 
     progress = Progress(TextColumn("[bold]search[/bold] {task.fields[phase]}"), BarColumn(bar_width=16),
@@ -93,6 +94,9 @@ def _run_search(rig, console, settings, quiet=False):
         if why:
             click.echo(f"supportless: note: {why}: the search only turns it (--free 2,3 or --free all to pose it)",
                        err=True)
+        ranges = joint_ranges(rig) if settings.anatomy else None
+        if ranges is not None and not quiet:
+            click.echo(ranges.describe() + " (--no-anatomy: the generic limits only)")
         return optimize(rig, settings, callback=callback)
 
 
@@ -166,6 +170,15 @@ def _summary_table(report: dict, verbose: bool = False):
     table.add_row("stability margin (of the height)", f"{100 * b['stability_margin']:.1f} %",
                   f"{100 * a['stability_margin']:.1f} %", _standing_word(b, a))
     table.add_row("largest joint rotation", "0°", f"{report['largest_rotation_deg']:.0f}°", "")
+    natural = report.get("naturalness") or {}
+    if natural.get("largest_chain_turn_deg") is not None:
+        end = natural.get("chain_end_name") or f"bone {natural['chain_end']}"
+        table.add_row("largest turn of a chain's end", "0°", f"{natural['largest_chain_turn_deg']:.0f}°", end)
+    use = natural.get("joint_range")
+    if use:
+        table.add_row("named joint nearest its range", "", f"{use['angle_deg']:.0f}° of {use['limit_deg']:.0f}°",
+                      f"{use['joint']} ({use['measure']})"
+                      + (f", {use['outside_deg']:.0f}° outside" if use["outside_deg"] >= 0.5 else ""))
     rot = report.get("print_rotation")
     if rot and rot["angle_deg"] >= 0.5:  # a turn that shows in whole degrees
         up = report["up"]

@@ -185,6 +185,9 @@ def _search_options(f):
                           "keep: print the model as it stands."),
         click.option("--limit", "limits", multiple=True,
                      help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
+        click.option("--anatomy/--no-anatomy", default=d.anatomy, show_default=True,
+                     help="Keep the joints the bone names identify (knees, elbows, spine, neck of a Mixamo, VRM, "
+                          "Unreal or Blender rig) within their range of motion; other bones keep --joint-limit."),
         click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
                      help="Reject poses that touch the plate with a new part or would fall over."),
         click.option("--symmetric", is_flag=True, default=d.symmetric,

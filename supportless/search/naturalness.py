@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..rig.rig import Rig
+from .anatomy import joint_ranges
 from .layout import Mirror, find_mirror
 
 __all__ = ["chain_ends", "mirror_error_deg", "naturalness", "rotation_angle_deg", "world_turn_deg"]
@@ -109,13 +110,18 @@ def naturalness(rig: Rig, angles: np.ndarray) -> dict:
         its name when the rig has names): the chain end turned furthest from
         its rest direction; ``largest_joint_deg``: the largest single bone's
         world turn; ``mirror_error_deg``: the pose's distance from symmetric
-        (None when the skeleton has no mirror plane, or in 2D).
+        (None when the skeleton has no mirror plane, or in 2D); ``joint_range``:
+        the named joint nearest (or furthest past) its range of motion
+        (:meth:`supportless.search.anatomy.JointRanges.usage`; None when no
+        bone's name is one the tables know).
     """
     turn = world_turn_deg(rig, angles)
     ends = chain_ends(rig)
     end = int(ends[np.argmax(turn[ends])])
     names = rig.bone_names() if rig.labels is not None else None
     mirror = find_mirror(rig) if rig.dim == 3 else None
-    return {"largest_chain_turn_deg": float(turn[end]), "chain_end": end + 1,
+    ranges = joint_ranges(rig)
+    return {"joint_range": None if ranges is None else ranges.usage(rig.transforms(np.asarray(angles, np.float64))),
+            "largest_chain_turn_deg": float(turn[end]), "chain_end": end + 1,
             "chain_end_name": names[end] if names else None, "largest_joint_deg": float(turn.max()),
             "mirror_error_deg": None if mirror is None else float(mirror_error_deg(rig, angles, mirror))}

@@ -38,6 +38,7 @@ from ..energies.support import support_volume
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
+from .anatomy import JointRanges
 from .naturalness import chain_ends, rotation_angle_deg
 from .prior import PosePrior
 from .standing import Standing
@@ -128,6 +129,9 @@ class Objective:
     support_floor : float
         Fixed cost of support however low it is, as a height added to every
         prism, in units of the model's rest height (the ``prism`` model).
+    joint_ranges : supportless.search.anatomy.JointRanges, optional
+        The ranges of motion of the named joints (:func:`supportless.search.anatomy.joint_ranges`): a
+        pose with a joint outside its range (a knee bent backwards) does not count.
     volume : float, optional
         The volume the distortion and intersection terms are divided by
         (default: the rig's rest volume). A simplified proxy of a dense
@@ -144,7 +148,8 @@ class Objective:
                  overhang_model: str = "prism", clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
-                 volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0):
+                 volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0,
+                 joint_ranges: JointRanges | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -169,6 +174,7 @@ class Objective:
         self.chain_limit = None if chain_limit is None else float(chain_limit)
         self.w_chain = float(w_chain)
         self._ends = chain_ends(rig)
+        self.joint_ranges = joint_ranges
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -263,6 +269,16 @@ class Objective:
         turn = rotation_angle_deg(transforms[..., self._ends, :d, :d])
         return np.radians(np.maximum(turn - self.chain_limit, 0.0)).sum(axis=-1)
 
+    def posed_violation(self, transforms: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """How far posed bodies break the rules measured on the pose, not on the joints' own turns: the chain
+        limit, the named joints' ranges and the standing rule; (P,) float64, 0 for a pose that keeps them."""
+        violation = self.chain_excess(transforms)
+        if self.joint_ranges is not None:
+            violation = violation + self.joint_ranges.excess(transforms)
+        if self.keep_standing:
+            violation = violation + self.standing.violation(transforms, V)
+        return violation
+
     def prior_cost(self, angles: np.ndarray, transforms: np.ndarray) -> np.ndarray:
         """The natural-pose prior: the joints' own turns (:class:`PosePrior`), plus ``w_chain`` times the
         squared turn (radians) of each chain end in the world, summed: three joints turning one way cost
@@ -276,9 +292,7 @@ class Objective:
 
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
-        violation = self.prior.excess(angles) + self.chain_excess(transforms)
-        if self.keep_standing:
-            violation = violation + self.standing.violation(transforms, V)
+        violation = self.prior.excess(angles) + self.posed_violation(transforms, V)
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
                 "overhang": self.overhang(V, rotations), "prior": self.prior_cost(angles, transforms),
                 "violation": violation}
@@ -417,9 +431,7 @@ class Objective:
             kept[todo] += self.w_arap * (arap[todo] / self.volume)
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
-            violation = excess[todo] + self.chain_excess(transforms[todo])
-            if self.keep_standing:
-                violation = violation + self.standing.violation(transforms[todo], V[todo])
+            violation = excess[todo] + self.posed_violation(transforms[todo], V[todo])
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
                        "intersection": 0.0, "violation": violation}
             kept[todo] = self.combine(self.normalise(partial))
@@ -441,6 +453,7 @@ class Objective:
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
                 "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
                 "chain_limit": self.chain_limit, "w_chain": self.w_chain,
+                "joint_ranges": None if self.joint_ranges is None else self.joint_ranges.describe(),
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
                 "support_floor": self.support_floor}
 

@@ -23,6 +23,7 @@ from ..base.errors import InputError
 from ..energies.raygrid import DEFAULT_RESOLUTION
 from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
+from .anatomy import joint_ranges
 from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
@@ -153,6 +154,11 @@ class SearchSettings:
         Weight of the chain ends' squared world turn (radians) in the
         natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
         0 (the default) leaves the prior to the joints' own turns.
+    anatomy : bool
+        Keep the joints the bone names identify (a glTF character's knees,
+        elbows, spine, neck) within their range of motion
+        (:mod:`supportless.search.anatomy`); bones without a known name keep
+        the generic limits only.
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
@@ -206,6 +212,7 @@ class SearchSettings:
     limits: tuple = ()
     chain_limit: float | None = None
     w_chain: float = 0.0
+    anatomy: bool = True
     keep_standing: bool = True
     symmetric: bool = False
     orient: str = "free"
@@ -312,7 +319,8 @@ class SearchSettings:
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
                          keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
-                         chain_limit=self.chain_limit, w_chain=self.w_chain)
+                         chain_limit=self.chain_limit, w_chain=self.w_chain,
+                         joint_ranges=joint_ranges(rig) if self.anatomy else None)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.
