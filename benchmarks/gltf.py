@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 from models import DATA
+from zoo import contact_sheet
 
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
@@ -40,7 +41,7 @@ HEADING = "## glTF characters"
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run(path: Path, cache_dir: str) -> dict:
+def run(path: Path, cache_dir: str, settings=None, pictures: Path | None = None) -> dict:
     """Prepare, search and slice one asset; returns the figures of one table row."""
     t0 = time.perf_counter()
     from supportless.copyleft.cgal import intersecting_face_pairs
@@ -51,14 +52,17 @@ def run(path: Path, cache_dir: str) -> dict:
     rig = sl.load_rig(path, cache_dir=cache_dir, height_mm=REFERENCE_HEIGHT_MM)
     prepare_s = time.perf_counter() - t0
     rest_pairs = intersecting_face_pairs(rig.vertices, rig.faces)
-    result = sl.optimize(rig)
+    result = sl.optimize(rig, settings or sl.SearchSettings())
     report = build_report(rig, result)
     sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
                          height_mm=REFERENCE_HEIGHT_MM).to_dict()
     with tempfile.TemporaryDirectory() as tmp:
         for label, file in write_pictures(tmp, rig, result, report):
-            if Path(file).name == "print.png":
+            if Path(file).name == "print.png" and pictures is None:
                 shutil.copy(file, ROOT / "docs" / f"gltf-{path.stem}.png")
+            if label == "before/after picture" and pictures is not None:
+                pictures.mkdir(parents=True, exist_ok=True)
+                shutil.copy(file, pictures / f"{path.stem}.png")
     before = report["before"]
     after = report["after"]
     return {
@@ -69,7 +73,28 @@ def run(path: Path, cache_dir: str) -> dict:
         "slicer": (sliced["before"]["support_mm"], sliced["after"]["support_mm"]),
         "pairs": after.get("intersecting_face_pairs"), "stands": after.get("stands"),
         "turn": report["print_rotation"]["angle_deg"], "largest": report["largest_rotation_deg"],
+        "natural": report["naturalness"],
+        "picture": None if pictures is None else str(pictures / f"{path.stem}.png"),
     }
+
+
+def _deg(x) -> str:
+    return "–" if x is None else f"{x:.0f}°"
+
+
+def _chain(natural: dict) -> str:
+    """The largest chain-end turn and the bone, short."""
+    name = (natural.get("chain_end_name") or f"bone {natural['chain_end']}").split(":")[-1]
+    return f"{natural['largest_chain_turn_deg']:.0f}° ({name})"
+
+
+def _range(natural: dict) -> str:
+    """The named joint nearest its range: ``LeftLeg bend 40°/140°``, or – without a table."""
+    use = natural.get("joint_range")
+    if not use:
+        return "–"
+    return (f"{use['joint'].split(':')[-1]} {use['measure']} {abs(use['angle_deg']):.0f}°/{abs(use['limit_deg']):.0f}°"
+            + (f", {use['outside_deg']:.0f}° out" if use["outside_deg"] >= 0.5 else ""))
 
 
 def section(rows: list[dict], argv: list[str]) -> str:
@@ -80,19 +105,22 @@ def section(rows: list[dict], argv: list[str]) -> str:
         "filament of the rest print body standing against the result as printed. Preparation with a cold cache.",
         "Command: `python benchmarks/gltf.py " + " ".join(argv) + "`", "",
         "| model | height in the file | faces / tets | bones (free) | prepare | search | prism estimate | "
-        "PrusaSlicer support | turned | largest joint turn | exact pairs rest / result | stands |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "PrusaSlicer support | turned | largest joint turn | largest chain-end turn | named joint nearest its "
+        "range | mirror error | exact pairs rest / result | stands |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         if "error" in r:
-            lines.append(f"| {r['name']} | failed: {r['error']} |" + " |" * 10)
+            lines.append(f"| {r['name']} | failed: {r['error']} |" + " |" * 13)
             continue
         (pb, pa), (sb, sa) = r["prism"], r["slicer"]
         lines.append(
             f"| {r['name']} | {r['height_m']:.2f} m | {r['faces']} / {r['tets']} | {r['bones']} ({r['free']}) | {r['prepare_s']:.1f} s | "
             f"{r['search_s']:.1f} s | {pb:.0f} → {pa:.0f} ({(1 - pa / pb) * 100:.1f} % less) | "
             f"{sb:.0f} → {sa:.0f} mm ({(1 - sa / sb) * 100:.1f} % less) | {r['turn']:.0f}° | "
-            f"{r['largest']:.0f}° | {r['rest_pairs']} / {r['pairs']} | {'yes' if r['stands'] else 'no'} |")
+            f"{r['largest']:.0f}° | {_chain(r['natural'])} | {_range(r['natural'])} | "
+            f"{_deg(r['natural']['mirror_error_deg'])} | {r['rest_pairs']} / {r['pairs']} | "
+            f"{'yes' if r['stands'] else 'no'} |")
     done = [1 - r["slicer"][1] / r["slicer"][0] for r in rows if "error" not in r and r["slicer"][0] > 0]
     lines.append("")
     if done:
@@ -116,16 +144,29 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="+", default=None)
     p.add_argument("--out", default=None, help="Write the section into this Markdown file.")
+    p.add_argument("--sheet", default=None,
+                   help="Draw a contact sheet of every character's before/after picture to this PNG "
+                        "(e.g. docs/gltf.png); the per-model print pictures in docs/ are then left alone.")
+    p.add_argument("--no-anatomy", action="store_true", help="SearchSettings.anatomy=False.")
+    p.add_argument("--chain-limit", type=float, default=None, help="SearchSettings.chain_limit, degrees.")
+    p.add_argument("--w-chain", type=float, default=None, help="SearchSettings.w_chain.")
+    p.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
+                   help="SearchSettings.symmetric: None (the tool's choice), True or False.")
     args = p.parse_args(argv)
+    settings = sl.SearchSettings().replace(chain_limit=args.chain_limit, w_chain=args.w_chain)
+    if args.no_anatomy:
+        settings = settings.replace(anatomy=False)
+    settings = settings.replace(symmetric={"auto": None, "on": True, "off": False}[args.symmetric])
     folder = DATA / "gltf"
     names = args.models or sorted(str(f.relative_to(folder).with_suffix("")) for f in
                                   [*folder.glob("*.glb"), *folder.glob("quaternius/*.glb")])
     rows = []
-    with tempfile.TemporaryDirectory() as cache:
+    with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as tmp:
+        pictures = Path(tmp) if args.sheet else None
         for name in names:
             t0 = time.perf_counter()
             try:
-                rows.append(run(folder / f"{name}.glb", cache))
+                rows.append(run(folder / f"{name}.glb", cache, settings, pictures))
             except Exception as exc:  # a benchmark row, not the end of the table
                 rows.append({"name": Path(name).name, "error": f"{type(exc).__name__}: {exc}"})
                 print(f"{name}: failed: {rows[-1]['error']}", file=sys.stderr, flush=True)
@@ -134,6 +175,10 @@ def main(argv=None):
             print(f"{name}: slicer {r['slicer'][0]:.0f} -> {r['slicer'][1]:.0f} mm, pairs {r['rest_pairs']} -> "
                   f"{r['pairs']}, search {r['search_s']:.1f} s ({time.perf_counter() - t0:.0f} s)",
                   file=sys.stderr, flush=True)
+        if args.sheet:
+            contact_sheet([{**r, "model": r["name"], "slicer": {"reduction_percent": 100 * (1 - r["slicer"][1] / r["slicer"][0])
+                                                               if r["slicer"][0] > 0 else None}}
+                           for r in rows if "error" not in r], Path(args.sheet))
     text = section(rows, argv)
     print(text)
     if args.out:

@@ -231,6 +231,9 @@ def main(argv=None):
     p.add_argument("--keep", default=None, help="Folder for each model's before/after and convergence pictures.")
     p.add_argument("--chain-limit", type=float, default=None, help="SearchSettings.chain_limit, degrees.")
     p.add_argument("--w-chain", type=float, default=None, help="SearchSettings.w_chain.")
+    p.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
+                   help="SearchSettings.symmetric: None (the tool's choice), True or False.")
+    p.add_argument("--no-anatomy", action="store_true", help="SearchSettings.anatomy=False.")
     args = p.parse_args(argv)
     figures = zoo_figures()
     models = args.models or [*figures, *SHARED]
@@ -241,6 +244,8 @@ def main(argv=None):
         settings = settings.replace(chain_limit=args.chain_limit)
     if args.w_chain is not None:
         settings = settings.replace(w_chain=args.w_chain)
+    settings = settings.replace(symmetric={"auto": None, "on": True, "off": False}[args.symmetric],
+                                anatomy=not args.no_anatomy)
     command = "python benchmarks/zoo.py " + " ".join(shlex.quote(a) for a in (sys.argv[1:] if argv is None else argv))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -190,8 +190,10 @@ def _search_options(f):
                           "Unreal or Blender rig) within their range of motion; other bones keep --joint-limit."),
         click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
                      help="Reject poses that touch the plate with a new part or would fall over."),
-        click.option("--symmetric", is_flag=True, default=d.symmetric,
-                     help="Keep left/right pairs of bones mirror images (found from the rest skeleton)."),
+        click.option("--symmetric/--no-symmetric", default=d.symmetric,
+                     help="Keep left/right pairs of bones mirror images (found from the rest skeleton), or pose "
+                          "each freely [default: for a figure with a mirror plane, mirrored unless the free pose "
+                          "needs 10 % less predicted support]."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]

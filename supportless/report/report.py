@@ -226,6 +226,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "angles_deg": np.degrees(result.angles).round(4).tolist(),
         "runtime_seconds": float(result.runtime_seconds),
         "choice": None if result.choice is None else result.choice.to_dict(),
+        "symmetry": result.symmetry,
         "naturalness": naturalness(rig, result.angles),
         "interrupted": bool(result.interrupted),
         "settings": result.settings.to_dict() | {"fixed_bones": [int(b) + 1 for b in np.flatnonzero(result.fixed)]},

@@ -19,10 +19,12 @@ import numpy as np
 
 from ..base.geometry import place_on_plate, print_pose
 from ..base.interrupt import deferred_interrupt
+from ..energies.slicer_model import predicted_support_mm
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .choice import choose
-from .layout import PoseLayout, require_mirror
+from .layout import PoseLayout, find_mirror, require_mirror
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
 from .result import PoseResult, as_written, measured_at, on_full_surface
@@ -57,6 +59,11 @@ PROXY_POLISH_BUDGET = 2_500_000
 #: intersects itself (an embedded closed surface is nowhere two layers deep); the exact gate then skips CGAL.
 #: On the robot 767 of 1128 rejected candidates, on the tree 480 of 516, had such a volume; no accepted one had.
 OVERLAP_CERTAIN = 1e-9
+
+#: A figure whose rest skeleton has a mirror plane is posed as mirror images unless the free search's
+#: answer needs this share less predicted support than the mirrored one's (``SearchSettings.symmetric``
+#: None). Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Symmetry").
+SYMMETRY_SHARE = 0.10
 
 # --------------------------------------------------------------------------- #
 # pose search
@@ -126,9 +133,16 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         its best so far with ``interrupted=True``
         (:func:`supportless.base.interrupt.deferred_interrupt`).
     """
+    settings = (settings or SearchSettings()).replace(**changes)
+    if settings.symmetric is None and rig.dim == 3 and find_mirror(rig) is not None:
+        return _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects)
+    return _optimize(rig, settings.replace(symmetric=bool(settings.symmetric)), objective, start, start_rotation, callback, intersects)
+
+
+def _optimize(rig, settings, objective, start, start_rotation, callback, intersects) -> PoseResult:
+    """:func:`optimize` with the symmetry settled (``settings.symmetric`` True or False)."""
     with deferred_interrupt():
         t0 = time.perf_counter()
-        settings = (settings or SearchSettings()).replace(**changes)
         coarse = rig.coarse_rig() if objective is None else None
         if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
             found = _search_proxy(rig, coarse, settings, start, start_rotation, callback, intersects, t0)
@@ -138,6 +152,49 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         if found.alternatives and found.settings.choose and rig.dim == 3 and not found.interrupted:
             found = choose(rig, found)
     return as_written(rig, found)
+
+
+def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects) -> PoseResult:
+    """Both searches of a figure with a mirror plane, and the mirrored answer unless the free one saves
+    :data:`SYMMETRY_SHARE` of its predicted support (``settings.symmetric`` None: the tool's choice).
+
+    The mirrored search runs first; the progress counts both (``phase`` says which). The answer's
+    ``symmetry`` holds both predictions and which was kept.
+    """
+    runs, seen = {}, {"it": 0, "offset": 0}
+    for mirrored in (True, False):
+        inner = None
+        if callback is not None:
+            def inner(it, info, mirrored=mirrored):
+                seen["it"] = seen["offset"] + it
+                total = 2 * info["iterations"] if mirrored else seen["offset"] + info["iterations"]
+                word = "mirrored" if mirrored else "free"
+                return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
+        runs[mirrored] = _optimize(rig, settings.replace(symmetric=mirrored), objective, start, start_rotation,
+                                   inner, intersects)
+        seen["offset"] = seen["it"]
+        if runs[mirrored].interrupted:
+            break
+    mirrored_mm = predicted_mm(rig, runs[True])
+    if False not in runs:
+        keep = runs[True]
+        free_mm = None
+    else:
+        free_mm = predicted_mm(rig, runs[False])
+        keep = runs[False] if free_mm < (1.0 - SYMMETRY_SHARE) * mirrored_mm else runs[True]
+    keep.symmetry = {"mode": "auto", "mirrored_mm": mirrored_mm, "free_mm": free_mm, "share": SYMMETRY_SHARE,
+                     "kept": "mirrored" if keep is runs[True] else "free",
+                     "runtime_seconds": sum(r.runtime_seconds for r in runs.values())}
+    keep.runtime_seconds = keep.symmetry["runtime_seconds"]
+    return keep
+
+
+def predicted_mm(rig: Rig, result: PoseResult) -> float:
+    """The slicer model's support filament of a result as printed, at the reference height, mm."""
+    up = np.asarray(rig.up, np.float64)
+    scale = REFERENCE_HEIGHT_MM / float(np.ptp(rig.vertices @ up))
+    return float(predicted_support_mm(result.print_vertices, rig.faces, up, float(result.settings.overhang_angle),
+                                      scale))
 
 
 def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_rotation, callback, intersects,

@@ -84,6 +84,13 @@ class PoseResult:
     choice : supportless.search.choice.Choice or None
         How the result was chosen among the search's best and the simpler
         answers (:func:`supportless.search.choice.choose`), or None when it was not.
+    symmetry : dict or None
+        When the tool chose between a mirrored and a free pose
+        (``settings.symmetric`` None on a figure with a mirror plane):
+        ``mirrored_mm`` and ``free_mm`` (each answer's predicted support
+        filament at the reference height), ``share`` (what the free answer had
+        to save), ``kept`` (``"mirrored"`` or ``"free"``) and
+        ``runtime_seconds`` (both searches). None otherwise.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.report.build_report`): it measures the rest pose and
@@ -107,6 +114,7 @@ class PoseResult:
     candidates: dict = field(default_factory=dict)
     alternatives: dict = field(default_factory=dict)
     choice: object = None
+    symmetry: dict | None = None
 
     def __post_init__(self):
         if self.rotation is None:

@@ -162,8 +162,13 @@ class SearchSettings:
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
-    symmetric : bool
-        Keep left/right pairs of bones mirror images (:mod:`supportless.search.layout`).
+    symmetric : bool or None
+        True: keep left/right pairs of bones mirror images
+        (:mod:`supportless.search.layout`); False: pose each bone freely;
+        None (the default): for a figure whose rest skeleton has a mirror
+        plane, search both ways and keep the mirrored pose unless the free
+        one needs :data:`supportless.search.optimizer.SYMMETRY_SHARE` less
+        predicted support (:func:`supportless.search.optimizer.optimize`).
     orient : {"free", "keep"}
         ``free``: search the print orientation with the pose (support is
         counted with the posed model turned by a rotation R,
@@ -214,7 +219,7 @@ class SearchSettings:
     w_chain: float = 0.0
     anatomy: bool = True
     keep_standing: bool = True
-    symmetric: bool = False
+    symmetric: bool | None = None
     orient: str = "free"
     orient_seeds: int = ORIENT_SEEDS
     choose: bool = True

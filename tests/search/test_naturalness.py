@@ -6,8 +6,7 @@ import pytest
 import supportless as sl
 from supportless.base.kinematics import euler_to_matrix, matrix_to_euler
 from supportless.search.layout import find_mirror
-from supportless.search.naturalness import (chain_ends, mirror_error_deg, naturalness, rotation_angle_deg,
-                                            world_turn_deg)
+from supportless.search.naturalness import chain_ends, mirror_error_deg, naturalness, rotation_angle_deg, world_turn_deg
 
 
 @pytest.fixture(scope="module")

@@ -61,3 +61,31 @@ def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
         assert np.any(turned > 0.99 * limits)  # the limit is reached, not just approached
         inside = X * 0.3  # well inside every ball: the variables come back
         np.testing.assert_allclose(layout.from_angles(layout.to_angles(inside[:1])[0]), inside[0], atol=1e-9)
+
+
+def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tpose_rig, bunny_rig):
+    """symmetric=None on a mirrored skeleton: both searches, the rule of SYMMETRY_SHARE on predicted support."""
+    from supportless.search.naturalness import mirror_error_deg
+    from supportless.search.optimizer import SYMMETRY_SHARE, predicted_mm
+
+    rig = tpose_rig
+    seen = []
+    auto = sl.optimize(rig, particles=16, iterations=4, seed=0, callback=lambda it, info: seen.append((it, info)))
+    info = auto.symmetry
+    assert info["mode"] == "auto" and info["share"] == SYMMETRY_SHARE
+    mirrored = sl.optimize(rig, particles=16, iterations=4, seed=0, symmetric=True)
+    free = sl.optimize(rig, particles=16, iterations=4, seed=0, symmetric=False)
+    assert mirrored.symmetry is None and free.symmetry is None  # forced either way: one search
+    assert info["mirrored_mm"] == pytest.approx(predicted_mm(rig, mirrored))  # the same searches, the same seed
+    assert info["free_mm"] == pytest.approx(predicted_mm(rig, free))
+    kept_free = info["free_mm"] < (1 - SYMMETRY_SHARE) * info["mirrored_mm"]
+    assert info["kept"] == ("free" if kept_free else "mirrored")
+    np.testing.assert_array_equal(auto.angles, (free if kept_free else mirrored).angles)
+    mirror = find_mirror(rig)
+    assert mirror_error_deg(rig, mirrored.angles, mirror) == pytest.approx(0.0, abs=1e-6)
+    # the progress counts both searches in one rising count, each phase named
+    its = [it for it, _ in seen]
+    assert its == sorted(its) and {i["phase"].split(":")[0] for _, i in seen} == {"mirrored", "free"}
+    assert its[-1] <= seen[-1][1]["iterations"]
+    # a skeleton without a mirror plane: one free search, nothing to choose
+    assert sl.optimize(bunny_rig, particles=8, iterations=2, seed=0, orient="keep").symmetry is None
