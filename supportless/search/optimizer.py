@@ -163,13 +163,7 @@ def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback,
     """
     runs, seen = {}, {"it": 0, "offset": 0}
     for mirrored in (True, False):
-        inner = None
-        if callback is not None:
-            def inner(it, info, mirrored=mirrored):
-                seen["it"] = seen["offset"] + it
-                total = 2 * info["iterations"] if mirrored else seen["offset"] + info["iterations"]
-                word = "mirrored" if mirrored else "free"
-                return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
+        inner = None if callback is None else _one_count(callback, seen, mirrored)
         runs[mirrored] = _optimize(rig, settings.replace(symmetric=mirrored), objective, start, start_rotation,
                                    inner, intersects)
         seen["offset"] = seen["it"]
@@ -187,6 +181,16 @@ def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback,
                      "runtime_seconds": sum(r.runtime_seconds for r in runs.values())}
     keep.runtime_seconds = keep.symmetry["runtime_seconds"]
     return keep
+
+
+def _one_count(callback, seen: dict, mirrored: bool):
+    """A callback for one of the two searches that reports to ``callback`` in one rising count."""
+    def inner(it, info):
+        seen["it"] = seen["offset"] + it
+        total = 2 * info["iterations"] if mirrored else seen["offset"] + info["iterations"]
+        word = "mirrored" if mirrored else "free"
+        return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
+    return inner
 
 
 def predicted_mm(rig: Rig, result: PoseResult) -> float:
