@@ -131,6 +131,7 @@ _WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EP
 
 def _search_options(f):
     """The search's options; their defaults are :class:`~supportless.search.settings.SearchSettings`'s."""
+    from ..search.optimizer import SYMMETRY_SHARE
     from ..search.settings import RANGES, SearchSettings
 
     d = SearchSettings()
@@ -193,7 +194,7 @@ def _search_options(f):
         click.option("--symmetric/--no-symmetric", default=d.symmetric,
                      help="Keep left/right pairs of bones mirror images (found from the rest skeleton), or pose "
                           "each freely [default: for a figure with a mirror plane, mirrored unless the free pose "
-                          "needs 10 % less predicted support]."),
+                          f"needs {100 * SYMMETRY_SHARE:g} % less predicted support]."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]

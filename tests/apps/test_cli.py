@@ -551,3 +551,20 @@ def test_the_chain_options_reach_the_search(branch_files, tmp_path):
     assert settings["chain_limit"] == 50.0 and settings["w_chain"] == 0.25
     bad = run("optimize", branch_files["mesh"], "--chain-limit", 200, "-o", tmp_path / "q.stl")
     assert bad.exit_code == 2 and "0<=x<=180" in bad.stderr
+
+
+@pytest.mark.parametrize("flags, symmetric, anatomy", [((), None, True), (("--symmetric",), True, True),
+                                                       (("--no-symmetric", "--no-anatomy"), False, False)])
+def test_the_symmetry_and_anatomy_options_reach_the_search(branch_files, tmp_path, flags, symmetric, anatomy):
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
+                 "--iterations", 1, "-q", "-o", tmp_path / "p.stl", "--report", tmp_path / "r.json", *flags)
+    assert result.exit_code == 0, (result.output, result.exception)
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["settings"]["anatomy"] is anatomy
+    # the branch has a mirror plane (its arm lies in it): the tool's choice searches it both ways, and the
+    # settings reported are those of the search whose answer was kept
+    assert (report["symmetry"] is not None) == (symmetric is None)
+    if symmetric is None:
+        assert report["symmetry"]["kept"] in ("mirrored", "free") and report["symmetry"]["mirrored_mm"] >= 0
+        symmetric = report["symmetry"]["kept"] == "mirrored"
+    assert report["settings"]["symmetric"] is symmetric
