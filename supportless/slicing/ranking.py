@@ -139,8 +139,9 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     if len(picked) < 2:
         reason = (f"{choice.reason}; no other answer is predicted within {100 * window:g} % of the rest pose's "
                   "support: nothing to slice")
-        return as_written(rig, with_choice(choice.candidates[choice.chosen].result,
-                                           dataclasses.replace(choice, reason=reason)))
+        return as_written(rig, dataclasses.replace(with_choice(choice.candidates[choice.chosen].result,
+                                                               dataclasses.replace(choice, reason=reason)),
+                                                   symmetry=result.symmetry))
     t0 = time.perf_counter()
     scale = scale_for_height(rig.vertices, rig.up, height_mm)
     poses = [choice.candidates[i].result for i in picked]
@@ -153,7 +154,7 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     chosen, reason = pick_sliced(picked, [candidates[i].sliced_mm for i in picked])
     new = dataclasses.replace(choice, candidates=candidates, chosen=chosen, by="slicer", reason=reason,
                               sliced_seconds=time.perf_counter() - t0, slicer_height_mm=float(height_mm))
-    return as_written(rig, with_choice(candidates[chosen].result, new))
+    return as_written(rig, dataclasses.replace(with_choice(candidates[chosen].result, new), symmetry=result.symmetry))
 
 
 def pick_sliced(picked: list[int], support_mm: list[float], noise: float = SLICER_NOISE) -> tuple[int, str]:
