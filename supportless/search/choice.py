@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..base.geometry import place_on_plate
+from ..copyleft.cgal import intersecting_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
@@ -316,13 +317,41 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
     """
     t0 = time.perf_counter()
     candidates, rest_mm = candidate_answers(rig, result, per_kind, height_mm)
-    index, reason = choose_by_model(np.array([c.predicted_mm for c in candidates]),
-                                    np.array([c.result.value for c in candidates]), rest_mm, tolerance)
+    crossing: list[int] = []  # answers that cross themselves as written (checked only when they would be chosen)
+    rest_pairs = None
+    while True:
+        open_ = [i for i in range(len(candidates)) if i not in crossing]
+        pick, reason = choose_by_model(np.array([candidates[i].predicted_mm for i in open_]),
+                                       np.array([candidates[i].result.value for i in open_]), rest_mm, tolerance)
+        index = open_[pick]
+        if len(open_) == 1:
+            break
+        if rest_pairs is None:
+            rest_pairs = len(intersecting_faces(rig.vertices, rig.faces)) if rig.dim == 3 else 0
+        if not crosses_as_written(rig, candidates[index].result, rest_pairs):
+            break
+        crossing.append(index)
+    if crossing:
+        reason += "; passed over for crossing themselves as written: " + ", ".join(f"#{i + 1}" for i in crossing)
     choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64))
     chosen = with_choice(candidates[index].result, choice)
     seconds = time.perf_counter() - t0
     return dataclasses.replace(chosen, runtime_seconds=result.runtime_seconds + seconds,
                                stats=dict(chosen.stats, choice_seconds=seconds))
+
+
+def crosses_as_written(rig: Rig, result: PoseResult, rest_pairs: int) -> bool:
+    """Whether an answer's mesh as written (:attr:`PoseResult.print_vertices`, full resolution) has more
+    intersecting triangle pairs than ``rest_pairs``, the rest pose's (CGAL's exact test; False with the
+    checks off).
+
+    A pose the search checked on a simplified proxy can cross itself on the full surface; so can a turn's
+    rounding turn a touch into a crossing. :func:`supportless.search.result.as_written` would replace such an
+    answer by the rest pose, so the choice passes it over for the next best instead.
+    """
+    if rig.dim != 3 or not result.settings.exact_intersections:
+        return False
+    return len(intersecting_faces(result.print_vertices, rig.faces)) > rest_pairs
 
 
 def with_choice(result: PoseResult, choice: Choice) -> PoseResult:

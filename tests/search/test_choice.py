@@ -10,7 +10,7 @@ from supportless.base.kinematics import euler_to_matrix
 from supportless.report.report import build_report
 from supportless.search.choice import KINDS, choose_by_model, print_distance_deg
 
-SMALL = {"particles": 40, "iterations": 15, "seed": 1}
+SMALL = {"particles": 40, "iterations": 15, "seed": 1, "symmetric": False}  # one search: the choice alone
 
 
 @pytest.fixture(scope="module")
@@ -83,3 +83,27 @@ def test_print_distance_ignores_a_spin_on_the_plate():
     bent = A.copy()
     bent[1, 2] = np.radians(45.0)
     assert print_distance_deg(A, spin, bent, spin, up) == pytest.approx(45.0, abs=1e-6)
+
+
+def test_an_answer_that_crosses_itself_as_written_is_passed_over_for_the_next(branch_rig, monkeypatch):
+    """The model's first pick crossing itself on the full surface (a proxy's pose can): the next is chosen,
+    not the rest pose that the written-file check would fall back to."""
+    from supportless.search import choice as choice_mod
+
+    search = sl.optimize(branch_rig, **SMALL, choose=False)
+    plain = choice_mod.choose(branch_rig, search)
+    first = plain.choice.chosen
+    asked = []
+
+    def crosses(rig, result, rest_pairs):
+        asked.append(rest_pairs)
+        return result is plain.choice.candidates[first].result or np.array_equal(
+            result.print_vertices, plain.choice.candidates[first].result.print_vertices)
+
+    monkeypatch.setattr(choice_mod, "crosses_as_written", crosses)
+    again = choice_mod.choose(branch_rig, search)
+    assert again.choice.chosen != first and f"#{first + 1}" in again.choice.reason
+    assert asked and asked[0] == 0  # the branch's rest pose crosses itself nowhere
+    predicted = [c.predicted_mm for i, c in enumerate(again.choice.candidates) if i != first]
+    assert again.choice.candidates[again.choice.chosen].predicted_mm <= min(predicted) + \
+        choice_mod.PREDICTION_TOLERANCE * again.choice.rest_mm + 1e-9
