@@ -211,8 +211,11 @@ def _last_error_line(stderr: str, stdout: str = "") -> str:
     for text in (stderr, stdout):
         lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
         lines = [ln for ln in lines if "Initializing StaticPrintConfigs" not in ln]  # the usual banner
+        lines = [_LOG_PREFIX_RE.sub("", ln) for ln in lines]
+        if lines and lines[-1].startswith("Object name:") and len(lines) > 1:  # the error is the line before
+            return f"{lines[-2]} ({lines[-1]})"
         if lines:
-            return _LOG_PREFIX_RE.sub("", lines[-1])
+            return lines[-1]
     return "no error message"
 
 

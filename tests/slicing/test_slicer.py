@@ -136,6 +136,10 @@ def test_last_error_line_strips_log_prefix():
     )
     assert sl._last_error_line(err) == "bad.stl: Loading of a model file failed."
     assert sl._last_error_line(err.rsplit("bad.stl", 1)[0]) == "stl_open: empty file"
+    # an error about one object ends with the object's name: the error itself is the line before
+    first_layer = "There is an object with no extrusions in the first layer.\nObject name: posed.stl\n"
+    assert sl._last_error_line(first_layer) == ("There is an object with no extrusions in the first layer. "
+                                                 "(Object name: posed.stl)")
 
 
 def test_report_to_dict_is_json_ready():
