@@ -175,9 +175,10 @@ def _search_options(f):
                      show_default=True, help="Largest rotation of any joint, degrees (one angle); 0 with "
                                              "--orient free turns the model without posing it."),
         click.option("--chain-limit", type=click.FloatRange(*RANGES["chain_limit"]), default=d.chain_limit,
+                     show_default=True,
                      help="Largest turn of a chain's end (a head, a hand, a tail tip) from its rest direction, "
                           "degrees: a limit on the whole chain, where --joint-limit bounds each joint alone "
-                          "[default: none]."),
+                          "(180: none)."),
         click.option("--w-chain", type=click.FloatRange(*RANGES["w_chain"]), default=d.w_chain, show_default=True,
                      help="Weight, inside the natural-pose prior, of how far the chains' ends turn in the world "
                           "(three joints turning one way cost more than three turning different ways)."),

@@ -44,13 +44,17 @@ from .prior import PosePrior
 from .standing import Standing
 
 __all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT",
-           "W_OVERHANG", "W_PRIOR"]
+           "W_CHAIN", "W_OVERHANG", "W_PRIOR"]
 
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
 W_OVERHANG = 1.0
 W_INTERSECT = 50.0
 W_PRIOR = 0.3
+#: Weight of the chain ends' squared world turn in the prior (:meth:`Objective.prior_cost`). Chosen on the zoo
+#: and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "The chain limit"): with the 60-degree chain
+#: limit, 0.03 gave zoo 65.2 % (65.7 % at 0), bunny 54.3 % (41.4 %), bb-bunny 44.3 % (41.4 %), smaller turns.
+W_CHAIN = 0.03
 
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
 #: larger than any pose that keeps them can cost.

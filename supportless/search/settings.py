@@ -24,7 +24,7 @@ from ..energies.raygrid import DEFAULT_RESOLUTION
 from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
 from .anatomy import joint_ranges
-from .objective import OVERHANG_MODELS, W_ARAP, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
+from .objective import OVERHANG_MODELS, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
            "angle_layout", "resolve_fixed_bones"]
@@ -45,6 +45,12 @@ AUTO = _Auto()
 #: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
 #: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
 JOINT_LIMIT = 45.0
+
+#: Default largest turn of a chain's end (a head, a hand, a tail or wing tip) in the world from its rest
+#: direction, degrees. Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md,
+#: "Zoo" and "The chain limit"): with the mirrored search, 60 degrees gave a zoo mean of 65.7 % (65.3 % with
+#: neither) and keeps the dragon's wings spread, the staff across the body and no head bent into a chest.
+CHAIN_LIMIT = 60.0
 
 #: Print-orientation modes (:attr:`SearchSettings.orient`).
 ORIENT_MODES = ("free", "keep")
@@ -149,11 +155,13 @@ class SearchSettings:
         Largest turn of a chain's end (a head, a hand, a tail tip) in the
         world from its rest direction, degrees: a hard rule over the whole
         chain, where ``joint_limit`` bounds each joint alone
-        (:mod:`supportless.search.naturalness`). None: no such rule.
+        (:mod:`supportless.search.naturalness`); default :data:`CHAIN_LIMIT`.
+        None (or 180): no such rule.
     w_chain : float
         Weight of the chain ends' squared world turn (radians) in the
         natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
-        0 (the default) leaves the prior to the joints' own turns.
+        default :data:`supportless.search.objective.W_CHAIN`; 0 leaves the prior to the
+        joints' own turns.
     anatomy : bool
         Keep the joints the bone names identify (a glTF character's knees,
         elbows, spine, neck) within their range of motion
@@ -215,8 +223,8 @@ class SearchSettings:
     w_prior: float = W_PRIOR
     joint_limit: float = JOINT_LIMIT
     limits: tuple = ()
-    chain_limit: float | None = None
-    w_chain: float = 0.0
+    chain_limit: float | None = CHAIN_LIMIT
+    w_chain: float = W_CHAIN
     anatomy: bool = True
     keep_standing: bool = True
     symmetric: bool | None = None
