@@ -25,6 +25,7 @@ from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .choice import choose
 from .layout import PoseLayout, find_mirror, require_mirror
+from .naturalness import mirror_error_deg
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
 from .result import PoseResult, as_written, measured_at, on_full_surface
@@ -134,7 +135,10 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
         (:func:`supportless.base.interrupt.deferred_interrupt`).
     """
     settings = (settings or SearchSettings()).replace(**changes)
-    if settings.symmetric is None and rig.dim == 3 and find_mirror(rig) is not None:
+    mirror = find_mirror(rig) if settings.symmetric is None and rig.dim == 3 else None
+    if mirror is not None and (start is None or mirror_error_deg(rig, np.asarray(start, np.float64).reshape(-1, 3),
+                                                                 mirror) < 1e-6):
+        # a start pose that breaks the mirror (one edited by hand) is searched freely: never worse than it
         return _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects)
     return _optimize(rig, settings.replace(symmetric=bool(settings.symmetric)), objective, start, start_rotation, callback, intersects)
 

@@ -176,7 +176,8 @@ class SearchSettings:
         None (the default): for a figure whose rest skeleton has a mirror
         plane, search both ways and keep the mirrored pose unless the free
         one needs :data:`supportless.search.optimizer.SYMMETRY_SHARE` less
-        predicted support (:func:`supportless.search.optimizer.optimize`).
+        predicted support (:func:`supportless.search.optimizer.optimize`); a
+        start pose that breaks the mirror is searched freely.
     orient : {"free", "keep"}
         ``free``: search the print orientation with the pose (support is
         counted with the posed model turned by a rotation R,
