@@ -526,9 +526,9 @@ def test_the_proxys_candidates_are_rescored_on_the_full_surface(dense_branch):
 
 def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monkeypatch):
     rig, _ = dense_branch
-    chosen = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
+    chosen = sl.optimize(rig, particles=12, iterations=4, orient="keep", symmetric=False, polish=0)
     seen = []
-    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=3,
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", symmetric=False, polish=3,
                          callback=lambda it, info: seen.append((it, info["iterations"])))
     assert result.stats["full_polish_evaluations"] == 1 + 3 * search_mod.POLISH_SAMPLES
     assert result.value <= chosen.value  # it starts at the chosen pose and keeps it unless it finds better
@@ -539,7 +539,7 @@ def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monke
     assert len(result.history) == len(chosen.history) + 3
     # by default the polish's generations follow the surface's size (about the same cost at any density)
     monkeypatch.setattr(search_mod, "PROXY_POLISH_BUDGET", 2 * len(rig.faces))
-    default = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    default = sl.optimize(rig, particles=12, iterations=4, orient="keep", symmetric=False)
     assert default.stats["full_polish_evaluations"] == 1 + 2 * search_mod.POLISH_SAMPLES
 
 
@@ -555,8 +555,8 @@ def test_a_model_far_from_the_origin_poses_as_it_does_at_the_origin(sizes):
     np.testing.assert_allclose(far.info["moved_by"], -(V + offset).min(0) / 2 - (V + offset).max(0) / 2)
     assert any("times its size from the origin" in w for w in far.info["warnings"])
     assert far.tet_weights.shape[1] == near.tet_weights.shape[1]  # TetGen may place a point more or less
-    a = sl.optimize(near, particles=20, iterations=6, seed=0, orient="keep")
-    b = sl.optimize(far, particles=20, iterations=6, seed=0, orient="keep")
+    a = sl.optimize(near, particles=20, iterations=6, seed=0, orient="keep", symmetric=False)
+    b = sl.optimize(far, particles=20, iterations=6, seed=0, orient="keep", symmetric=False)
     np.testing.assert_allclose(b.angles, a.angles, atol=1e-6)
     # the input's far coordinates kept only ~1e-11 of the model's size: TetGen meshes the inside a little
     # differently, so the weights, and a posed surface's measures, differ by a few %; the rest pose's are equal

@@ -65,7 +65,7 @@ def test_the_chain_limit_rejects_a_chain_turned_past_it_and_the_search_keeps_it(
 
     A = np.zeros((arm.bone_count, 3))
     A[[2, 1, 0], 2] = np.radians(30.0)
-    free = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",)).objective(arm)
+    free = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",), chain_limit=None).objective(arm)
     limited = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",), chain_limit=60.0).objective(arm)
     assert free.terms(A)["violation"] == pytest.approx(0.0)
     assert limited.terms(A)["violation"] == pytest.approx(np.radians(30.0))  # the end is 30 degrees past 60
@@ -82,7 +82,7 @@ def test_the_prior_pays_for_the_accumulated_turn_of_a_chain(arm):
     same[[2, 1, 0], 2] = np.radians(30.0)
     mixed = same.copy()
     mixed[1, 2] = -mixed[1, 2]
-    plain = sl.SearchSettings(keep_standing=False, free=("all",)).objective(arm)
+    plain = sl.SearchSettings(keep_standing=False, free=("all",), w_chain=0.0).objective(arm)
     chained = sl.SearchSettings(keep_standing=False, free=("all",), w_chain=1.0).objective(arm)
     assert plain.terms(same)["prior"] == pytest.approx(plain.terms(mixed)["prior"])  # per joint: the same cost
     extra = chained.terms(same)["prior"] - plain.terms(same)["prior"]

@@ -230,7 +230,7 @@ def test_orient_keep_is_the_pose_only_search(branch_rig):
     from supportless.search.settings import PSO_PRESETS
 
     rig, settings = branch_rig, SearchSettings(particles=16, iterations=8, seed=5, orient="keep",
-                                               exact_intersections=False)
+                                               exact_intersections=False, symmetric=False)
     kept = sl.optimize(rig, settings)
     objective = settings.objective(rig)
     layout = PoseLayout(rig, settings.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
@@ -436,7 +436,7 @@ def test_distinct_candidates_skip_near_copies_and_poor_poses():
 def test_search_result_carries_its_candidates_best_first(branch_rig):
     from supportless.search.optimizer import distinct_candidates
 
-    res = sl.optimize(branch_rig, particles=24, iterations=10, seed=0, orient="keep")
+    res = sl.optimize(branch_rig, particles=24, iterations=10, seed=0, orient="keep", symmetric=False)
     c = res.candidates
     assert len(c["values"]) >= 2 and c["angles"].shape[1:] == (branch_rig.bone_count, 3)
     assert np.all(np.diff(c["values"]) >= 0)
@@ -500,9 +500,9 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
 
 
 def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
-    plain = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, choose=False)
+    plain = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, choose=False, symmetric=False)
     assert plain.stats["polish_evaluations"] == 0  # none by default on a model searched at full resolution
-    polished = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, polish=5, choose=False)
+    polished = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, polish=5, choose=False, symmetric=False)
     assert polished.stats["polish_evaluations"] == 1 + 5 * POLISH_SAMPLES
     assert polished.value < plain.value  # a short swarm leaves room that small steps find
     np.testing.assert_array_equal(polished.history[:len(plain.history)], plain.history)  # the same swarm first
@@ -519,7 +519,7 @@ def test_only_poses_that_could_become_the_swarms_best_are_measured_for_self_inte
     real = Objective._intersection
     monkeypatch.setattr(Objective, "_intersection",  # poses measured (one for an unbatched pose)
                         lambda self, V: measured.append(len(V) if V.ndim == 3 else 1) or real(self, V))
-    result = sl.optimize(branch_rig, particles=30, iterations=10, seed=2)
+    result = sl.optimize(branch_rig, particles=30, iterations=10, seed=2, symmetric=False)
     progress = result.stats["progress_calls"]  # each change of the best measures it once, in full
     evaluations = 30 * 11 + 15 * 11  # the pose phase, then half the swarm turning
     assert 0 < sum(measured) - progress < 0.2 * evaluations
