@@ -134,8 +134,9 @@ def section(rows: list[dict], argv: list[str]) -> str:
         lines.append("")
         lines += [f"- {line}" for line in r["log"]]
         lines.append("")
-        lines.append(f"![{r['name']}](../docs/gltf-{r['name']}.png)")
-        lines.append("")
+        if "--sheet" not in argv:  # with a contact sheet the per-model pictures are not redrawn
+            lines.append(f"![{r['name']}](../docs/gltf-{r['name']}.png)")
+            lines.append("")
     return "\n".join(lines)
 
 
