@@ -6,7 +6,8 @@ step did to make the print body, the preparation time (cold cache), the
 default search (200 x 120, print orientation free) and PrusaSlicer's support
 filament for the rest print body standing against the result as printed, both
 60 mm tall (PrusaSlicer's default profile). Pictures of each result go to
-``docs/gltf-NAME.png`` (the found pose standing and as printed). Prints a
+``docs/gltf-NAME.png`` (the found pose standing and as printed), or with
+``--sheet docs/gltf.png`` one contact sheet of every before/after. Prints a
 Markdown section and, with ``--out``, writes it as the "## glTF characters"
 section of that file.
 
