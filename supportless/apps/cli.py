@@ -50,10 +50,12 @@ def main():
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @rig_options
-def prepare(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir):
+def prepare(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, bones=None,
+            skeleton_out=None):
     """Tetrahedralise MODEL and compute its skinning weights (cached)."""
     t0 = time.perf_counter()
-    rig, _ = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm, keep_units=keep_units)
+    rig, _ = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm, keep_units=keep_units,
+                   bones=bones, skeleton_out=skeleton_out)
     dt = time.perf_counter() - t0
     source = "from the cache" if rig.info.get("from_cache") else "prepared"
     click.echo(f"{rig.name}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
@@ -253,6 +255,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     for path in (output, upright_out):
         _check_mesh_path(path)
     profile_path = search_options.pop("printer_profile")
+    bones, skeleton_out = search_options.pop("bones"), search_options.pop("skeleton_out")
     front_files = []
     if pareto_count:
         from .pareto import front_paths
@@ -262,7 +265,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
         meshes, poses, gallery = front_paths(output, pareto_count)
         front_files = [("--pareto", f) for f in (*meshes, *poses, gallery)]
     check_output_paths([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose),
-                    *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
+                    ("--skeleton-out", skeleton_out), *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
     profile = _printer_profile(profile_path)
     settings = _settings(profile, **search_options)
     if slice_rank_count == 0:
@@ -271,7 +274,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if slice_rank_count:
         _require_slicer("--slice-rank")
     _check_bones_early(settings, model, skeleton)
-    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units)
+    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units,
+                       bones=bones, skeleton_out=skeleton_out)
     if slice_rank_count and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     if slice_check_flag and rig.dim != 3:
@@ -424,7 +428,8 @@ def _slice_and_report(rig, result, report, report_path, console, frame, printed=
               help="Posed mesh to write, in the pose's print orientation: +Z up, in millimetres, on the plate.")
 @click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
               help="Also write the posed mesh standing as the input stood.")
-def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, pose, output, upright_out):
+def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, pose, output, upright_out,
+          bones=None, skeleton_out=None):
     """Apply a saved pose (and its print orientation) to MODEL and write the posed mesh.
 
     The mesh is printed as tall as the pose file says (the height `optimize`
@@ -443,7 +448,7 @@ def apply(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, c
         keep_units = saved["how"] == "units"
         height_mm = None if keep_units else saved["height_mm"]
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
-                       keep_units=keep_units)
+                       keep_units=keep_units, bones=bones, skeleton_out=skeleton_out)
     angles = read_pose(pose, rig.bones, tree=rig.tree, root_bone=rig.root_bone)
     R = read_print_rotation(pose, rig.dim)
     _say_frame(rig, frame)
@@ -601,7 +606,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
 @click.option("--workdir", type=click.Path(file_okay=False, exists=True), default=".", show_default=True,
               help="The only folder the page reads and writes files in.")
 def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, demo_figure, port, host,
-         workdir):
+         workdir, bones=None, skeleton_out=None):
     """Pose MODEL in the browser: live supports, optimize, export.
 
     Only the address printed (with its token) opens the page.
@@ -613,7 +618,7 @@ def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, ca
     if model is None:
         _fail("give a MODEL (with --skeleton) or --demo")
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
-                       keep_units=keep_units)
+                       keep_units=keep_units, bones=bones, skeleton_out=skeleton_out)
     _say_frame(rig, frame)
     run_app(rig, host=host, port=port, block=True, frame=frame, workdir=workdir)
 

@@ -37,7 +37,7 @@ def _console():
 
 
 def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None,
-          keep_units=False):
+          keep_units=False, bones=None, skeleton_out=None):
     """The rig of MODEL and its print frame (:mod:`supportless.files.printframe`; :func:`_say_frame` says it).
 
     The rig stays in the file's units; ``height_mm`` and ``keep_units`` only
@@ -56,7 +56,7 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
     if keep_units and height_mm is not None:
         _fail("--keep-units and --height-mm do not go together; choose one")
     rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
-                   progress=progress)
+                   progress=progress, bones=bones, skeleton_out=skeleton_out)
     source = rig.info.get("gltf")
     if source is not None:  # what was done to the glTF asset, one line per step
         for line in source["log"]:
@@ -95,8 +95,14 @@ def rig_options(f):
                      help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
     f = click.option("--up", default="y", show_default=True,
                      help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
+    f = click.option("--skeleton-out", type=click.Path(dir_okay=False), default=None,
+                     help="Write the skeleton used as TGF (e.g. one built from the shape, to edit and pass back "
+                          "with --skeleton).")(f)
+    f = click.option("--bones", type=click.IntRange(2, 200), default=None,
+                     help="About how many bones a skeleton built from the shape gets [default: 8 to 40].")(f)
     f = click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None,
-                     help="TGF skeleton (default: MODEL with .tgf; a rigged .glb/.gltf needs none).")(f)
+                     help="TGF skeleton (default: MODEL with .tgf; a rigged .glb/.gltf needs none; with neither, "
+                          "or 'auto', one is built from the shape).")(f)
     return f
 
 

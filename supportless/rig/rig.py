@@ -535,7 +535,7 @@ def _attach_surface(V, TV, TT, path):
 # --------------------------------------------------------------------------- #
 def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None, tets=None, weights=None,
              samples_per_bone: int = SAMPLES_PER_BONE, bbw_iterations: int = BBW_ITERATIONS,
-             progress=None, height_mm: float | None = None) -> Rig:
+             progress=None, height_mm: float | None = None, bones=None, skeleton_out=None) -> Rig:
     """Read a model and its skeleton and prepare (or load from the cache) its rig.
 
     Parameters
@@ -546,7 +546,10 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         :func:`~supportless.files.gltf.load_gltf_character`), or ``"demo:NAME"`` for a built-in figure
         (then ``skeleton`` is not needed).
     skeleton : str or os.PathLike
-        TGF skeleton. Defaults to the model's path with ``.tgf``.
+        TGF skeleton. Defaults to the model's path with ``.tgf``; when there
+        is no such file (or with ``"auto"``) a skeleton is built from the shape
+        (:func:`supportless.rig.autoskeleton.auto_skeleton`, said in
+        ``info["warnings"]``).
     up : str or sequence of float
         Printing direction.
     cache : bool
@@ -565,6 +568,12 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
     height_mm : float, optional
         Scale the model so its height along ``up`` is this many millimetres
         (default: as read; a glTF asset's metres become millimetres).
+    bones : int or (int, int), optional
+        For a skeleton built from the shape: about how many bones (see
+        :func:`~supportless.rig.autoskeleton.auto_skeleton`).
+    skeleton_out : str or os.PathLike, optional
+        Write the skeleton used (in the model file's units, TGF) there, e.g.
+        a built one to edit and pass back as ``skeleton``.
 
     Returns
     -------
@@ -598,10 +607,28 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         weights = None
     else:
         mesh_path = Path(model)
-        skel_path = Path(skeleton) if skeleton is not None else mesh_path.with_suffix(".tgf")
+        skel_path = Path(skeleton) if skeleton not in (None, "auto") else mesh_path.with_suffix(".tgf")
         V, F = read_mesh(mesh_path)
-        J, B = read_tgf(skel_path)
+        if skeleton == "auto" or (skeleton is None and not skel_path.exists() and V.shape[1] == 3
+                                  and not np.all(V[:, 2] == 0)):
+            from .autoskeleton import auto_skeleton
+
+            if progress:
+                progress("building a skeleton from the shape")
+            J, B = auto_skeleton(V, F, parse_up(up, 3), bones)
+            skel_path = None
+            notes.append(f"no skeleton given: built one from the shape, {len(B)} bones "
+                         "(--skeleton-out FILE.tgf keeps it to edit and pass back with --skeleton)")
+        else:
+            J, B = read_tgf(skel_path)
         name = mesh_path.stem
+    if skeleton_out is not None:
+        from ..files.meshes import write_tgf
+
+        try:
+            write_tgf(skeleton_out, J, B)
+        except OSError as exc:
+            raise InputError(skeleton_out, f"cannot write the skeleton: {exc.strerror or exc}") from None
     if height_mm is not None:
         h = np.ptp(V @ parse_up(up, V.shape[1]))
         if not h > 0:
@@ -632,6 +659,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
                             **settings)
         file = (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"rig-{key}.npz"
         if cache and (rig := _try_cached(file, name, notes)) is not None:
+            rig.info["warnings"] = list(rig.info.get("warnings", [])) + notes
             return rig
     try:
         rig = prepare_rig(V, F, J, B, up, name=name, samples_per_bone=samples_per_bone, bbw_iterations=bbw_iterations,

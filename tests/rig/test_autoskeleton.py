@@ -1,0 +1,97 @@
+"""A skeleton from the shape: simple solids whose skeleton is known, the bone range, joints inside, the TGF round trip."""
+
+import numpy as np
+import pytest
+
+import supportless as sl
+from supportless.base.kinematics import bone_parents
+from supportless.rig.autoskeleton import BONE_RANGE, auto_skeleton, bones_from_tree
+from supportless.shapes.sdf import Body, cap
+
+UP = np.array([0.0, 1.0, 0.0])
+
+
+def _solid(*capsules, edge=0.8):
+    """A closed surface of capsules ``(a, b, radius)`` blended together."""
+    body = Body()
+    body.add(*[cap(np.asarray(a, float), np.asarray(b, float), r, r, 1.0) for a, b, r in capsules])
+    V, F = sl.shapes.sdf.mesh_from_sdf(body.parts, body.bounds(2 * edge), edge, cut_floor=False)
+    return V, F
+
+
+def _tips_and_junctions(J, B):
+    degree = np.bincount(B.ravel(), minlength=len(J))
+    return np.flatnonzero(degree == 1), np.flatnonzero(degree > 2)
+
+
+def _inside(V, F, points):
+    import igl
+
+    return igl.fast_winding_number(np.asarray(V, np.float64), np.asarray(F, np.int64), np.asarray(points)) > 0.5
+
+
+def test_a_capsule_is_one_chain_along_its_axis():
+    V, F = _solid(((0, 4, 0), (0, 36, 0), 4.0))
+    J, B = auto_skeleton(V, F, UP, bones=(1, 6))
+    tips, junctions = _tips_and_junctions(J, B)
+    assert len(junctions) == 0 and len(tips) == 2  # one chain
+    assert np.abs(J[:, [0, 2]]).max() < 1.0  # on the axis
+    assert np.ptp(J[:, 1]) > 0.6 * 32  # along most of its length
+
+
+@pytest.mark.parametrize("arms", [3, 4])
+def test_a_star_is_a_root_with_a_branch_per_arm(arms):
+    """A Y (three arms) has one branch point; a plus (four) a root with four branches."""
+    centre = np.array([0.0, 30.0, 0.0])
+    angles = np.linspace(0, 2 * np.pi, arms, endpoint=False) + 0.3
+    ends = [centre + 22 * np.array([np.cos(a), np.sin(a), 0.0]) for a in angles]
+    V, F = _solid(*[(centre, e, 3.5) for e in ends])
+    J, B = auto_skeleton(V, F, UP, bones=(arms, 4 * arms))
+    tips, junctions = _tips_and_junctions(J, B)
+    assert len(tips) == arms
+    assert len(junctions) == 1 and np.linalg.norm(J[junctions[0]] - centre) < 5.0
+    for e in ends:  # every arm reaches near its end
+        assert np.linalg.norm(J[tips] - e, axis=1).min() < 6.0
+    # a tree written root -> tip: every joint ends at most one bone, one root
+    assert np.bincount(B[:, 1], minlength=len(J)).max() == 1
+    assert (bone_parents(B) < 0).sum() == arms  # the root's bones start at the junction
+
+
+def test_pruning_keeps_every_limb_longer_than_the_threshold():
+    """A chain with a short twig (3 % of the height) and a long branch (30 %): the twig goes, the branch stays."""
+    nodes = np.array([[0, 0, 0], [0, 10, 0], [0, 20, 0], [0, 30, 0], [0, 40, 0], [0, 50, 0],  # trunk 0-5
+                      [1.5, 20, 0],                                                       # twig off node 2
+                      [5, 30, 0], [10, 30, 0], [15, 30, 0]], float)                       # branch off node 3
+    tree = np.array([[0, 1], [1, 2], [2, 3], [3, 4], [4, 5], [2, 6], [3, 7], [7, 8], [8, 9]])
+    J, B = bones_from_tree(nodes, tree, height=50.0, bones=(2, 20))
+    kept = {tuple(p) for p in J.round(6)}
+    assert (1.5, 20.0, 0.0) not in kept and (15.0, 30.0, 0.0) in kept
+    assert (0.0, 0.0, 0.0) in kept and (0.0, 50.0, 0.0) in kept
+
+
+@pytest.mark.parametrize("wanted", [None, 12, (3, 5)])
+def test_the_bone_count_stays_in_range_and_joints_lie_inside(tpose_rig, wanted):
+    V, F = tpose_rig.vertices, tpose_rig.faces
+    J, B = auto_skeleton(V, F, tpose_rig.up, bones=wanted)
+    if wanted == (3, 5):  # fewer than the figure's 6 branches (head, arms, legs, trunk): one bone each
+        assert len(B) == 6
+    else:
+        low, high = BONE_RANGE if wanted is None else (9, 15)
+        assert low <= len(B) <= high
+    assert _inside(V, F, J).all()
+    assert len(_tips_and_junctions(J, B)[0]) >= 5  # head, two hands, two feet
+
+
+def test_a_model_without_a_skeleton_gets_one_and_the_written_tgf_gives_the_same_rig(tmp_path):
+    V, F = sl.demo_figure("tpose")[:2]
+    sl.write_mesh(tmp_path / "figure.obj", V, F)
+    out = tmp_path / "figure-skeleton.tgf"
+    rig = sl.load_rig(tmp_path / "figure.obj", up="y", cache_dir=tmp_path / "cache", skeleton_out=out)
+    assert any("built one from the shape" in w and f"{rig.bone_count} bones" in w for w in rig.info["warnings"])
+    J, B = sl.read_tgf(out)
+    np.testing.assert_allclose(J, rig.joints)
+    np.testing.assert_array_equal(B, rig.bones)
+    again = sl.load_rig(tmp_path / "figure.obj", out, up="y", cache_dir=tmp_path / "cache")
+    np.testing.assert_array_equal(again.bones, rig.bones)
+    np.testing.assert_allclose(again.tet_weights, rig.tet_weights)  # the same rig: the same cache entry
+    assert again.info.get("from_cache")
