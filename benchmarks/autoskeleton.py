@@ -1,0 +1,148 @@
+"""Skeletons from the shape against hand-made ones, and figures that have none, checked with PrusaSlicer.
+
+For every shared model with a TGF (the bunnies, woody, the libigl rigs, the
+prototype's cantilever): the default search with its hand-made skeleton and
+with one built from the shape (the TGF ignored), PrusaSlicer's support of
+each (default profile, 60 mm tall). For every figure in
+``../shared/data/unrigged/``: the built skeleton only. A model that fails is a
+row with its one-line reason. Prints Markdown; ``--sheet`` draws every
+before/after picture into one contact sheet; ``--out`` writes the section
+"## Skeletons from the shape".
+
+    python benchmarks/autoskeleton.py [--models bunny unrigged/lion ...] [--sheet docs/autoskeleton.png]
+        [--out benchmarks/RESULTS.md]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shlex
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from models import DATA
+from zoo import contact_sheet
+
+import supportless as sl
+from supportless.copyleft.cgal import intersecting_face_pairs
+from supportless.files.printframe import REFERENCE_HEIGHT_MM
+from supportless.report.report import build_report, write_pictures
+from supportless.rig.autoskeleton import auto_skeleton
+from supportless.slicing.prusaslicer import slice_check
+
+HEADING = "## Skeletons from the shape"
+RIGGED = ("bunny", "bb-bunny", "woody", "libigl/elephant", "libigl/dinosaur", "libigl/hand", "libigl/arm",
+          "prototype/cantilever_M")
+
+
+def mesh_file(name: str) -> Path | None:
+    for ext in (".obj", ".off", ".stl", ".ply"):
+        if (DATA / f"{name}{ext}").is_file():
+            return DATA / f"{name}{ext}"
+    return None
+
+
+def run(name: str, skeleton, pictures: Path, cache: str) -> dict:
+    """One search and slicing; ``skeleton`` None builds one from the shape."""
+    path = mesh_file(name)
+    label = f"{name} ({'hand' if skeleton is not None else 'auto'})"
+    if path is None:
+        return {"model": label, "error": "missing"}
+    t0 = time.perf_counter()
+    try:
+        if skeleton is None:
+            V, F = sl.read_mesh(path)
+            t = time.perf_counter()
+            auto_skeleton(V, F, np.array([0.0, 1.0, 0.0]))
+            skeleton_s = time.perf_counter() - t
+            rig = sl.load_rig(path, "auto", up="y", cache_dir=cache, height_mm=REFERENCE_HEIGHT_MM)
+        else:
+            skeleton_s = None
+            rig = sl.load_rig(path, skeleton, up="y", cache_dir=cache, height_mm=REFERENCE_HEIGHT_MM)
+        prepare_s = time.perf_counter() - t0
+        result = sl.optimize(rig)
+        report = build_report(rig, result)
+        sliced = slice_check((rig.vertices, rig.faces), (result.print_vertices, rig.faces), up=rig.up,
+                             height_mm=REFERENCE_HEIGHT_MM)
+        written = dict(write_pictures(pictures / label.replace("/", "-"), rig, result, report))
+    except Exception as exc:  # a row, not the end of the table
+        return {"model": label, "error": f"{type(exc).__name__}: {str(exc).splitlines()[0]}"}
+    return {"model": label, "bones": rig.bone_count, "faces": len(rig.faces), "skeleton_s": skeleton_s,
+            "prepare_s": prepare_s, "search_s": result.runtime_seconds,
+            "before": sliced.support_mm_before, "after": sliced.support_mm_after,
+            "slicer": {"reduction_percent": None if sliced.support_mm_before <= 0 else
+                       100 * (1 - sliced.support_mm_after / sliced.support_mm_before)},
+            "pairs": intersecting_face_pairs(result.print_vertices, rig.faces),
+            "stands": report["after"].get("stands"), "stood": report["before"].get("stands"),
+            "chain": report["naturalness"]["largest_chain_turn_deg"],
+            "picture": written["before/after picture"]}
+
+
+def table(rows: list[dict]) -> str:
+    lines = ["| model (skeleton) | bones | faces | skeleton built | prepare | search | PrusaSlicer support | "
+             "exact pairs | stands (rest / found) | largest chain-end turn |", "|" + "---|" * 10]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['model']} | failed: {r['error']} |" + " |" * 8)
+            continue
+        red = r["slicer"]["reduction_percent"]
+        built = "–" if r["skeleton_s"] is None else f"{r['skeleton_s']:.1f} s"
+        lines.append(f"| {r['model']} | {r['bones']} | {r['faces']} | {built} | {r['prepare_s']:.1f} s | "
+                     f"{r['search_s']:.1f} s | {r['before']:.0f} → {r['after']:.0f} mm "
+                     f"({'–' if red is None else format(red, '.1f') + ' %'}) | {r['pairs']} | "
+                     f"{'yes' if r['stood'] else 'no'} / {'yes' if r['stands'] else 'no'} | {r['chain']:.0f}° |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--models", nargs="+", default=None)
+    p.add_argument("--sheet", default=None)
+    p.add_argument("--out", default=None)
+    args = p.parse_args(argv)
+    unrigged = sorted(f"unrigged/{f.stem}" for f in (DATA / "unrigged").glob("*.*"))
+    names = args.models or [*RIGGED, *unrigged]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        pictures, cache = Path(tmp) / "pictures", str(Path(tmp) / "cache")
+        for name in names:
+            tgf = DATA / f"{name}.tgf"
+            for skeleton in ((tgf, None) if tgf.is_file() else (None,)):
+                rows.append(run(name, skeleton, pictures, cache))
+                print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
+        if args.sheet:
+            contact_sheet([r for r in rows if "error" not in r], Path(args.sheet))
+            shutil.rmtree(pictures, ignore_errors=True)
+    pairs = {}
+    for r in rows:
+        if "error" not in r and r["slicer"]["reduction_percent"] is not None:
+            base, kind = r["model"].rsplit(" (", 1)
+            pairs.setdefault(base, {})[kind.rstrip(")")] = r["slicer"]["reduction_percent"]
+    both = [v for v in pairs.values() if "hand" in v and "auto" in v]
+    only = [v["auto"] for k, v in pairs.items() if k.startswith("unrigged/") and "auto" in v]
+    text = "\n".join([HEADING, "", "Command: `python benchmarks/autoskeleton.py " + " ".join(shlex.quote(a) for a in argv)
+                      + "` (2 cores; default search, PrusaSlicer default profile, 60 mm tall, up +Y).", "",
+                      table(rows), "",
+                      (f"Hand against built skeleton over {len(both)} models: mean PrusaSlicer reduction "
+                       f"{np.mean([v['hand'] for v in both]):.1f} % against {np.mean([v['auto'] for v in both]):.1f} %."
+                       if both else ""),
+                      (f"Unrigged figures ({len(only)} of {len(unrigged)} ran): mean {np.mean(only):.1f} %." if only
+                       else "")])
+    print(text)
+    if args.out:
+        path = Path(args.out)
+        old = path.read_text() if path.is_file() else ""
+        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
+        new = pattern.sub(lambda _: text + "\n", old) if pattern.search(old) else old.rstrip() + "\n\n" + text + "\n"
+        path.write_text(new)
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    main()
