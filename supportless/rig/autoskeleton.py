@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 from ..base.errors import InputError
 
 __all__ = ["BONE_RANGE", "GRID_CELLS", "TWIG_SHARE", "auto_skeleton", "bones_from_tree", "curve_skeleton",
-           "surface_graph"]
+           "inside_joints", "surface_graph"]
 
 #: Grid cells along the longest side of the model for the graph the skeleton is computed on.
 GRID_CELLS = 48
@@ -322,4 +322,64 @@ def auto_skeleton(vertices: np.ndarray, faces: np.ndarray, up, bones: tuple | in
         J, _ = pull_joints_inside(V, F, J, B, up, tolerance=1.0, within=0.01)
     except (InputError, ValueError):  # an open surface has no inside to pull towards
         pass
-    return J, B
+    return inside_joints(V, F, J, B)
+
+
+def inside_joints(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, bones: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Joints moved inside the surface along their bones; a tip that cannot be is dropped with its bone.
+
+    A skeleton node of a thin part (a finger) can lie just outside. Each joint
+    outside (winding number below 1/2) moves to the first point inside along
+    one of its bones, nearest the joint; a tip with none inside is removed, and
+    so on until every joint is inside (or the skeleton would lose its last bone).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+    joints : (j, 3) float64
+    bones : (m, 2) int64
+        Root -> tip.
+
+    Returns
+    -------
+    joints : (j', 3) float64
+    bones : (m', 2) int64
+    """
+    import igl
+
+    V = np.asarray(vertices, np.float64)
+    F = np.asarray(faces, np.int64)
+    J, B = np.array(joints, np.float64), np.array(bones, np.int64)
+
+    def inside(points):
+        return igl.fast_winding_number(V, F, np.atleast_2d(points)) > 0.5
+
+    t = np.linspace(0.02, 0.98, 49)
+    while True:
+        outside = np.flatnonzero(~inside(J))
+        if len(outside) == 0 or len(B) <= 1:
+            return J, B
+        degree = np.bincount(B.ravel(), minlength=len(J))
+        drop = None
+        for j in outside:
+            moved = False
+            for a, b in B[(B[:, 0] == j) | (B[:, 1] == j)]:
+                other = b if a == j else a
+                samples = J[j] + t[:, None] * (J[other] - J[j])
+                ok = np.flatnonzero(inside(samples))
+                if len(ok):
+                    J[j] = samples[ok[0]]
+                    moved = True
+                    break
+            if not moved and degree[j] == 1:
+                drop = j
+                break
+        if drop is None:
+            return J, B
+        B = B[(B[:, 0] != drop) & (B[:, 1] != drop)]
+        keep = np.setdiff1d(np.arange(len(J)), [drop])
+        remap = -np.ones(len(J), np.int64)
+        remap[keep] = np.arange(len(keep))
+        J, B = J[keep], remap[B]
