@@ -609,6 +609,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         mesh_path = Path(model)
         skel_path = Path(skeleton) if skeleton not in (None, "auto") else mesh_path.with_suffix(".tgf")
         V, F = read_mesh(mesh_path)
+        V, F = _closed(V, F, mesh_path, notes)
         if skeleton == "auto" or (skeleton is None and not skel_path.exists() and V.shape[1] == 3
                                   and not np.all(V[:, 2] == 0)):
             from .autoskeleton import auto_skeleton
@@ -686,6 +687,27 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
                 f"next time; --cache-dir DIR chooses another folder")
     rig.info["warnings"] = list(rig.info.get("warnings", [])) + notes  # after the entry: said once
     return rig
+
+
+def _closed(V: np.ndarray, F: np.ndarray, path, notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """A 3D surface that is not closed (a scan or sculpt with holes, shells through each other) made into the
+    closed solid to print (:func:`~supportless.files.printbody.print_body`), with one note; others as they are."""
+    if V.shape[1] != 3 or np.all(V[:, 2] == 0):
+        return V, F
+    try:
+        check_closed_surface(F)
+        return V, F
+    except InputError as exc:
+        reason = exc.reason
+    from ..files.printbody import print_body
+
+    try:
+        body = print_body(V, F, np.zeros(len(F), np.int64), np.ones((len(V), 1)), [Path(path).stem])
+    except InputError:
+        raise InputError(path, f"{reason}; it could not be closed into a solid either") from None
+    notes.append(f"the surface was not closed ({reason.split(';')[0]}): made a closed solid of it ("
+                 + "; ".join(line for line in body.log if not line.startswith("warning")) + ")")
+    return body.vertices, body.faces
 
 
 def _try_cached(file: Path, name: str, notes: list[str]) -> Rig | None:

@@ -565,3 +565,20 @@ def test_a_model_far_from_the_origin_poses_as_it_does_at_the_origin(sizes):
     near_terms, far_terms = a.objective.terms(rest), b.objective.terms(rest)
     for key in ("overhang", "intersection"):
         assert float(far_terms[key][0]) == pytest.approx(float(near_terms[key][0]), rel=1e-6, abs=1e-12)
+
+
+def test_an_open_surface_is_made_a_closed_solid(bad_inputs, tmp_path):
+    """A surface with a hole: closed into the solid to print, said in one note. Two boxes that share only an
+    edge stay an error of one line (their union is not a solid TetGen can fill)."""
+    from supportless.base.geometry import signed_volume
+    from supportless.files.meshes import check_closed_surface
+
+    model, kwargs, _, fragments = bad_inputs["not closed"]
+    rig = sl.load_rig(model, up="y", cache_dir=tmp_path, **kwargs)
+    check_closed_surface(rig.faces)
+    note = [w for w in rig.info["warnings"] if w.startswith("the surface was not closed")]
+    assert len(note) == 1 and fragments[0] in note[0] and "made a closed solid" in note[0]
+    assert signed_volume(rig.vertices, rig.faces) > 0
+    model, kwargs, _, _ = bad_inputs["not manifold"]
+    with pytest.raises(sl.InputError):
+        sl.load_rig(model, up="y", cache_dir=tmp_path, **kwargs)
