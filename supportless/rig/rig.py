@@ -26,6 +26,7 @@ from ..files.joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_jo
 from ..files.meshes import check_closed_surface, check_not_flat, read_dmat, read_mesh, read_tet_mesh, read_tgf
 from ..files.repair import repair_degenerate_faces, repair_note
 from ..files.skeleton import check_skeleton
+from ..files.solid import closed_solid
 from .balance import centre_of_mass_operator
 from .cache import default_cache_dir, gltf_cache_file, read_entry, rig_cache_key, write_entry
 from .weights import BBW_ITERATIONS, check_weights, compute_weights
@@ -569,11 +570,9 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         Scale the model so its height along ``up`` is this many millimetres
         (default: as read; a glTF asset's metres become millimetres).
     bones : int or (int, int), optional
-        For a skeleton built from the shape: about how many bones (see
-        :func:`~supportless.rig.autoskeleton.auto_skeleton`).
+        A skeleton built from the shape: about how many bones (:func:`~supportless.rig.autoskeleton.auto_skeleton`).
     skeleton_out : str or os.PathLike, optional
-        Write the skeleton used (in the model file's units, TGF) there, e.g.
-        a built one to edit and pass back as ``skeleton``.
+        Write the skeleton used there (TGF, the file's units), e.g. a built one to edit and pass back.
 
     Returns
     -------
@@ -609,7 +608,7 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
         mesh_path = Path(model)
         skel_path = Path(skeleton) if skeleton not in (None, "auto") else mesh_path.with_suffix(".tgf")
         V, F = read_mesh(mesh_path)
-        V, F = _closed(V, F, mesh_path, notes)
+        V, F = closed_solid(V, F, mesh_path, notes)
         if skeleton == "auto" or (skeleton is None and not skel_path.exists() and V.shape[1] == 3
                                   and not np.all(V[:, 2] == 0)):
             from .autoskeleton import auto_skeleton
@@ -687,27 +686,6 @@ def load_rig(model, skeleton=None, up="y", *, cache: bool = True, cache_dir=None
                 f"next time; --cache-dir DIR chooses another folder")
     rig.info["warnings"] = list(rig.info.get("warnings", [])) + notes  # after the entry: said once
     return rig
-
-
-def _closed(V: np.ndarray, F: np.ndarray, path, notes: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """A 3D surface that is not closed (a scan or sculpt with holes, shells through each other) made into the
-    closed solid to print (:func:`~supportless.files.printbody.print_body`), with one note; others as they are."""
-    if V.shape[1] != 3 or np.all(V[:, 2] == 0):
-        return V, F
-    try:
-        check_closed_surface(F)
-        return V, F
-    except InputError as exc:
-        reason = exc.reason
-    from ..files.printbody import print_body
-
-    try:
-        body = print_body(V, F, np.zeros(len(F), np.int64), np.ones((len(V), 1)), [Path(path).stem])
-    except InputError:
-        raise InputError(path, f"{reason}; it could not be closed into a solid either") from None
-    notes.append(f"the surface was not closed ({reason.split(';')[0]}): made a closed solid of it ("
-                 + "; ".join(line for line in body.log if not line.startswith("warning")) + ")")
-    return body.vertices, body.faces
 
 
 def _try_cached(file: Path, name: str, notes: list[str]) -> Rig | None:
