@@ -13,7 +13,7 @@ person would:
    branches between junctions and tips are simplified to a few straight bones
    each, with the tolerance chosen so that the bone count lands in
    ``bones`` (8–40 by default, :func:`bones_from_tree`);
-4. the joints are pulled inside the surface.
+4. a joint outside the skin (a fingertip's node) moves in along its bone, or goes (:func:`inside_joints`).
 
 The result is a joints/bones pair like a TGF file's, and everything after it
 (tetrahedra, weights, search) runs on it unchanged.
@@ -308,8 +308,6 @@ def auto_skeleton(vertices: np.ndarray, faces: np.ndarray, up, bones: tuple | in
         Inside the surface where it is closed.
     bone_pairs : (m, 2) int64
     """
-    from ..files.joints import pull_joints_inside
-
     V = np.asarray(vertices, np.float64)
     F = np.asarray(faces, np.int64)
     up = np.asarray(up, np.float64)
@@ -318,10 +316,6 @@ def auto_skeleton(vertices: np.ndarray, faces: np.ndarray, up, bones: tuple | in
         (max(1, int(round(0.75 * bones))), max(1, int(round(1.25 * bones)))) if np.ndim(bones) == 0 else tuple(bones))
     nodes, tree = curve_skeleton(*surface_graph(V, F))
     J, B = bones_from_tree(nodes, tree, height, wanted, centre=V.mean(axis=0))
-    try:
-        J, _ = pull_joints_inside(V, F, J, B, up, tolerance=1.0, within=0.01)
-    except (InputError, ValueError):  # an open surface has no inside to pull towards
-        pass
     return inside_joints(V, F, J, B)
 
 
