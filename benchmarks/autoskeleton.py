@@ -16,7 +16,6 @@ before/after picture into one contact sheet; ``--out`` writes the section
 from __future__ import annotations
 
 import argparse
-import re
 import shlex
 import shutil
 import sys
@@ -25,15 +24,15 @@ import time
 from pathlib import Path
 
 import numpy as np
-from models import DATA
-from zoo import contact_sheet
-
 import supportless as sl
 from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.rig.autoskeleton import auto_skeleton
 from supportless.slicing.prusaslicer import slice_check
+
+from models import DATA, write_section
+from zoo import contact_sheet
 
 HEADING = "## Skeletons from the shape"
 #: The shared 3D models with a hand-made skeleton (woody and the prototype's cantilever are planar: no slicer).
@@ -137,11 +136,7 @@ def main(argv=None):
                        else "")])
     print(text)
     if args.out:
-        path = Path(args.out)
-        old = path.read_text() if path.is_file() else ""
-        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
-        new = pattern.sub(lambda _: text + "\n", old) if pattern.search(old) else old.rstrip() + "\n\n" + text + "\n"
-        path.write_text(new)
+        write_section(Path(args.out), HEADING, text + "\n")
 
 
 if __name__ == "__main__":

@@ -23,9 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
-import models
-
 import supportless as sl
+
+import models
 
 
 def main(argv=None):

@@ -22,7 +22,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import re
 import shutil
 import sys
 import tempfile
@@ -30,13 +29,13 @@ import time
 from pathlib import Path
 
 import numpy as np
-from models import DATA
-from zoo import contact_sheet
-
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import slice_check
+
+from models import DATA, write_section
+from zoo import contact_sheet
 
 HEADING = "## glTF characters"
 ROOT = Path(__file__).resolve().parents[1]
@@ -184,11 +183,7 @@ def main(argv=None):
     text = section(rows, argv)
     print(text)
     if args.out:
-        path = Path(args.out)
-        old = path.read_text() if path.is_file() else ""
-        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
-        new = pattern.sub(lambda _: text + "\n", old) if pattern.search(old) else old.rstrip() + "\n\n" + text + "\n"
-        path.write_text(new)
+        write_section(Path(args.out), HEADING, text + "\n")
 
 
 if __name__ == "__main__":

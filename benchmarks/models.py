@@ -6,6 +6,7 @@ folder is on the import path).
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import supportless as sl
@@ -27,3 +28,16 @@ def load(name: str) -> sl.Rig:
     if name in sl.DEMO_FIGURES:
         return sl.load_rig(f"demo:{name}")
     return sl.load_rig(DATA / f"{name}.obj", DATA / f"{name}.tgf", up="y")
+
+
+def write_section(path: Path, heading: str, text: str) -> None:
+    """Put ``text`` as the ``heading`` section ("## ...") of the Markdown file ``path``: it replaces an existing
+    one (up to the next "## " heading), else it is appended at the end."""
+    path = Path(path)
+    old = path.read_text() if path.is_file() else ""
+    match = re.search(rf"^{re.escape(heading)}\s*$.*?(?=^## |\Z)", old, flags=re.M | re.S)
+    if match:
+        new = old[:match.start()] + text + ("\n" if old[match.end():] else "") + old[match.end():]
+    else:
+        new = old.rstrip("\n") + "\n\n" + text if old else text
+    path.write_text(new)

@@ -18,21 +18,20 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import re
 import shlex
 import sys
 from pathlib import Path
 
-import models
 import numpy as np
-from models import DATA, SHARED, available
-
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.search.layout import find_mirror
 from supportless.search.naturalness import mirror_error_deg
 from supportless.search.optimizer import SYMMETRY_SHARE, predicted_mm
 from supportless.slicing.prusaslicer import slice_check
+
+import models
+from models import DATA, SHARED, available, write_section
 
 HEADING = "## Symmetry"
 SHARES = (0.0, 0.05, 0.10, 0.15, 0.20, 0.30, 1.0)
@@ -134,11 +133,7 @@ def main(argv=None):
     text = section(rows, "python benchmarks/symmetry.py " + " ".join(shlex.quote(a) for a in argv))
     print(text)
     if args.out:
-        path = Path(args.out)
-        old = path.read_text() if path.is_file() else ""
-        pattern = re.compile(rf"^{re.escape(HEADING)}\n.*?(?=^## |\Z)", re.S | re.M)
-        new = pattern.sub(lambda _: text + "\n", old) if pattern.search(old) else old.rstrip() + "\n\n" + text + "\n"
-        path.write_text(new)
+        write_section(Path(args.out), HEADING, text + "\n")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import re
 import shlex
 import subprocess
 import sys
@@ -25,15 +24,15 @@ import tempfile
 import time
 from pathlib import Path
 
-import models
 import numpy as np
-from models import DATA, SHARED, available
-
 import supportless as sl
 from supportless.base.kinematics import euler_to_matrix
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import SlicerError, slice_check
+
+import models
+from models import DATA, SHARED, available, write_section
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADING = "## Zoo"
@@ -206,17 +205,6 @@ def section(rows: list[dict], figures: list[str], settings, command: str) -> str
     ])
 
 
-def write_section(path: Path, text: str) -> None:
-    """Put ``text`` as the "## Zoo" section of ``path``: replace an existing one, else append at the end."""
-    old = path.read_text() if path.is_file() else ""
-    match = re.search(rf"^{re.escape(HEADING)}\s*$.*?(?=^## |\Z)", old, flags=re.M | re.S)
-    if match:
-        new = old[:match.start()] + text + ("\n" if old[match.end():] else "") + old[match.end():]
-    else:
-        new = old.rstrip("\n") + "\n\n" + text if old else text
-    path.write_text(new)
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="+", default=None,
@@ -261,7 +249,7 @@ def main(argv=None):
     text = section(rows, figures, settings, command.strip())
     print(text)
     if args.out:
-        write_section(Path(args.out), text)
+        write_section(Path(args.out), HEADING, text)
 
 
 if __name__ == "__main__":
