@@ -23,9 +23,9 @@ import tempfile
 import time
 from pathlib import Path
 
-import supportless as sl
-
 import models
+
+import supportless as sl
 
 
 def main(argv=None):

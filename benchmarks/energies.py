@@ -17,11 +17,11 @@ import time
 
 import numba
 import numpy as np
+from models import DATA
+
 import supportless as sl
 from supportless.base.kinematics import skin
 from supportless.energies.arap import arap_energy
-
-from models import DATA
 
 
 def best_of(fn, repeat):

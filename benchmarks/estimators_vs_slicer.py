@@ -42,9 +42,11 @@ import sys
 import time
 from pathlib import Path
 
+import models
 import numpy as np
-import supportless as sl
 from scipy.optimize import minimize, nnls
+
+import supportless as sl
 from supportless.base.geometry import place_on_plate, print_pose
 from supportless.copyleft.cgal import intersecting_face_pairs
 from supportless.energies import slicer_model
@@ -52,8 +54,6 @@ from supportless.files.printer import default_profile, overhang_threshold, read_
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
 from supportless.slicing.ranking import distinct_poses
-
-import models
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_SAMPLES = ROOT / "benchmarks" / "slicer_samples.jsonl"

@@ -29,13 +29,13 @@ import time
 from pathlib import Path
 
 import numpy as np
+from models import DATA, write_section
+from zoo import contact_sheet
+
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import slice_check
-
-from models import DATA, write_section
-from zoo import contact_sheet
 
 HEADING = "## glTF characters"
 ROOT = Path(__file__).resolve().parents[1]

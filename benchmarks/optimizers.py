@@ -22,12 +22,12 @@ import sys
 import time
 from pathlib import Path
 
+import models
 import numpy as np
+from models import SHARED, available
+
 import supportless as sl
 from supportless.copyleft.cgal import intersecting_face_pairs
-
-import models
-from models import SHARED, available
 
 OPTIMIZERS = ("pso", "cma")
 

@@ -43,6 +43,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+from models import DATA, SHARED, available, load
+
 import supportless as sl
 from supportless.base.geometry import print_pose
 from supportless.energies.surface import boundary_edges
@@ -51,8 +53,6 @@ from supportless.report.report import reduction
 from supportless.search.orientation import rotations_from_params, seed_params
 from supportless.slicing.prusaslicer import scale_for_height, slice_support
 from supportless.slicing.ranking import SLICE_RANK, SLICE_WINDOW, pick_sliced, to_slice
-
-from models import DATA, SHARED, available, load
 
 HEADING = "## Pose and orientation"
 PLANAR = ("woody",)

@@ -22,12 +22,12 @@ import sys
 import time
 from pathlib import Path
 
+from models import available, load
+
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import find_prusa_slicer, slice_check
-
-from models import available, load
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,14 +19,14 @@ import sys
 import time
 from pathlib import Path
 
+import models
 import numpy as np
+
 import supportless as sl
 from supportless.apps.pareto import pareto_front
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import predicted_slicer
 from supportless.slicing.prusaslicer import find_prusa_slicer, scale_for_height, slice_support
-
-import models
 
 
 def hypervolume(support, distortion, reference) -> float:

@@ -34,6 +34,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+
 from supportless.files.meshes import read_mesh
 from supportless.files.posefile import write_pose
 from supportless.slicing.prusaslicer import PRESETS, SUPPORT_OPTIONS, find_prusa_slicer

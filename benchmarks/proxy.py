@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import igl
 import numpy as np
+from models import DATA
+
 from supportless.apps.bench import random_poses
 from supportless.files.meshes import read_mesh, read_tgf
 from supportless.rig.rig import prepare_rig
 from supportless.search.settings import SearchSettings
 from supportless.shapes.character import character
-
-from models import DATA
 
 
 def rigs():

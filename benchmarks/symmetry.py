@@ -22,16 +22,16 @@ import shlex
 import sys
 from pathlib import Path
 
+import models
 import numpy as np
+from models import DATA, SHARED, available, write_section
+
 import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.search.layout import find_mirror
 from supportless.search.naturalness import mirror_error_deg
 from supportless.search.optimizer import SYMMETRY_SHARE, predicted_mm
 from supportless.slicing.prusaslicer import slice_check
-
-import models
-from models import DATA, SHARED, available, write_section
 
 HEADING = "## Symmetry"
 SHARES = (0.0, 0.05, 0.10, 0.15, 0.20, 0.30, 1.0)

@@ -24,15 +24,15 @@ import tempfile
 import time
 from pathlib import Path
 
+import models
 import numpy as np
+from models import DATA, SHARED, available, write_section
+
 import supportless as sl
 from supportless.base.kinematics import euler_to_matrix
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.report.report import build_report, write_pictures
 from supportless.slicing.prusaslicer import SlicerError, slice_check
-
-import models
-from models import DATA, SHARED, available, write_section
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADING = "## Zoo"

@@ -21,7 +21,8 @@ from .energies.overhang import overhang_energy, risky_area, risky_faces
 from .energies.support import support_volume
 from .files.meshes import read_mesh, read_tgf, write_mesh, write_tgf
 from .files.posefile import read_pose, write_pose
-from .rig.rig import Rig, load_rig, prepare_rig
+from .rig.load import load_rig
+from .rig.rig import Rig, prepare_rig
 from .search.objective import Objective
 from .search.optimizer import PoseResult, optimize, particle_swarm
 from .search.settings import SearchSettings

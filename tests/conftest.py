@@ -81,6 +81,18 @@ def prusa_slicer() -> str:
 
 
 @pytest.fixture(scope="session")
+def cura_engine() -> tuple[str, Path]:
+    """CuraEngine and the folder of Cura's printer definitions (:mod:`supportless.slicing.cura`)."""
+    from supportless.slicing.cura import find_cura_definitions, find_cura_engine, missing_message
+
+    exe = find_cura_engine()
+    folder = find_cura_definitions() if exe else None
+    if exe is None or folder is None:
+        unavailable(missing_message(exe, folder))
+    return exe, folder
+
+
+@pytest.fixture(scope="session")
 def chromium() -> str:
     """Path of the Chromium executable for Playwright (``chromium`` on PATH, or ``$SUPPORTLESS_CHROMIUM``)."""
     env = os.environ.get("SUPPORTLESS_CHROMIUM", "").strip()

@@ -39,7 +39,7 @@ __all__ = ["COLUMNS", "ModelSpec", "find_models", "finished_row", "run_batch", "
 
 #: The columns of ``summary.csv``.
 COLUMNS = ("model", "status", "reason", "predicted_before_mm", "predicted_after_mm", "predicted_reduction",
-           "slicer_before_mm", "slicer_after_mm", "slicer_reduction", "distortion", "seconds")
+           "slicer", "slicer_before_mm", "slicer_after_mm", "slicer_reduction", "distortion", "seconds")
 
 #: Environment of each local worker: one thread for the BLAS, as each worker is one core (numba's: :func:`_one_numba_thread`).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
@@ -168,8 +168,8 @@ def _one_numba_thread() -> None:
     numba.set_num_threads(1)
 
 
-def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_mm: float | None = None,
-              cache_dir: str | None = None, slice_check: bool = False) -> dict:
+def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "auto", height_mm: float | None = None,
+              cache_dir: str | None = None, slice_check: bool | dict = False) -> dict:
     """Pose one model and write ``out/NAME/``; the Dask task. Never raises: a failure is a row.
 
     Parameters
@@ -180,14 +180,15 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
     settings : dict
         :class:`supportless.search.settings.SearchSettings` fields.
     up, cache_dir
-        As for :func:`supportless.rig.rig.load_rig`.
+        As for :func:`supportless.rig.load.load_rig`.
     height_mm : float, optional
         The printed height of the rest pose (:func:`supportless.files.printframe.print_frame`;
         default 60 mm): the STL is written +Z up, in millimetres, on the plate.
-    slice_check : bool
-        Let PrusaSlicer choose among the answers the search weighed
+    slice_check : bool or dict
+        Let the slicer choose among the answers the search weighed
         (:func:`supportless.slicing.ranking.slice_choice`), and slice the rest pose
-        and the written STL with it.
+        and the written STL with it: True for PrusaSlicer, or the fields of a
+        :class:`~supportless.slicing.choice.SlicerChoice` (``engine``, ``support``, ``cura_definitions``).
 
     Returns
     -------
@@ -229,8 +230,8 @@ def run_model(spec: ModelSpec, out: str, settings: dict, up: str = "y", height_m
 def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cache_dir, slice_check) -> dict:
     from ..files.printframe import rig_print_frame
     from ..report.outputs import write_result
-    from ..report.report import build_report, support_headline
-    from ..rig.rig import load_rig
+    from ..report.report import build_report, slicer_label, support_headline
+    from ..rig.load import load_rig
     from ..search.optimizer import optimize
     from ..search.settings import SearchSettings
 
@@ -239,11 +240,12 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     frame = rig_print_frame(rig, height_mm)
     stage("searching")
     result = optimize(rig, SearchSettings.from_dict(settings))
-    if slice_check and result.choice is not None:  # PrusaSlicer chooses among the answers, as optimize does
+    choice = _slicer_choice(slice_check)
+    if slice_check and result.choice is not None:  # the slicer chooses among the answers, as optimize does
         from ..slicing.ranking import SLICE_RANK, slice_choice
 
         stage("slicing")
-        result = slice_choice(rig, result, SLICE_RANK, height_mm=frame.height_mm)
+        result = slice_choice(rig, result, SLICE_RANK, height_mm=frame.height_mm, choice=choice)
     stage("writing")
     report = build_report(rig, result, frame)
     stl = folder / f"{spec.name}.stl"
@@ -260,13 +262,24 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
         from ..slicing.prusaslicer import slice_check as slice_pair
 
         stage("slicing")
-        sliced = slice_pair((frame.place(rig.vertices), rig.faces), stl, up=(0.0, 0.0, 1.0), height_mm=None).to_dict()
+        sliced = slice_pair((frame.place(rig.vertices), rig.faces), stl, up=(0.0, 0.0, 1.0), height_mm=None,
+                            choice=choice).to_dict()
         report["slice_check"] = sliced | {"sliced_file": stl.name}
         report["support"] = support_headline(report)
-        row |= {"slicer_before_mm": sliced["before"]["support_mm"], "slicer_after_mm": sliced["after"]["support_mm"],
+        row |= {"slicer": slicer_label(sliced), "slicer_before_mm": sliced["before"]["support_mm"], "slicer_after_mm": sliced["after"]["support_mm"],
                 "slicer_reduction": None if sliced["reduction_percent"] is None else sliced["reduction_percent"] / 100}
     write_json(folder / "report.json", report)
     return row
+
+
+def _slicer_choice(slice_check):
+    """The :class:`~supportless.slicing.choice.SlicerChoice` of ``slice_check`` (a dict of its fields), else None."""
+    if not isinstance(slice_check, dict):
+        return None
+    from ..slicing.choice import SlicerChoice
+
+    return SlicerChoice(slice_check.get("engine", "prusa"), slice_check.get("support", "grid"),
+                        slice_check.get("cura_definitions"))
 
 
 def write_summary(out: str | os.PathLike, rows: list[dict]) -> Path:
@@ -298,7 +311,7 @@ def write_contact_sheet(out: str | os.PathLike, rows: list[dict], columns: int =
         ax.imshow(mpimg.imread(Path(out) / r["model"] / "before_after.png"))
         sliced = r.get("slicer_reduction") not in (None, "")  # the slicer's figure where it ran
         red = r.get("slicer_reduction") if sliced else r.get("predicted_reduction")
-        source = "PrusaSlicer" if sliced else "predicted"
+        source = (r.get("slicer") or "PrusaSlicer") if sliced else "predicted"
         ax.set_title(r["model"] + ("" if red in (None, "") else f": support {-100 * float(red):+.0f} % ({source})"),
                      fontsize=11)
         ax.axis("off")
@@ -328,8 +341,8 @@ def _client(scheduler: str | None, workers: int | None):
     return Client(cluster), cluster
 
 
-def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict | None = None, *, up: str = "y",
-              height_mm: float | None = None, cache_dir: str | None = None, slice_check: bool = False,
+def run_batch(folder: str | os.PathLike, out: str | os.PathLike, settings: dict | None = None, *, up: str = "auto",
+              height_mm: float | None = None, cache_dir: str | None = None, slice_check: bool | dict = False,
               scheduler: str | None = None, workers: int | None = None, force: bool = False,
               on_result: Callable[[dict, bool], None] | None = None) -> list[dict]:
     """Pose every model of ``folder`` into ``out`` on Dask; returns the summary rows.

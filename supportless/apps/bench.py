@@ -113,13 +113,13 @@ def timed_search(rig, objective, settings) -> dict:
     return {"seconds": time.perf_counter() - t, "result": result, **result.stats}
 
 
-def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iterations: int = 120,
+def bench_model(model, skeleton=None, up="auto", *, particles: int = 200, iterations: int = 120,
                 backend: str = "both", echo: Callable[[str], None] = print, repeat: int = 3) -> dict:
     """Time one model's stages on the chosen backends and print the table.
 
     Returns the measured times: ``{"rows": [(stage, {backend: seconds}, per_pose_count, note)], ...}``.
     """
-    from ..rig.rig import load_rig
+    from ..rig.load import load_rig
     from ..search.settings import SearchSettings
 
     backends = ["fast", "numpy"] if backend == "both" else [backend]
@@ -193,7 +193,7 @@ def bench_model(model, skeleton=None, up="y", *, particles: int = 200, iteration
                        for b, s in search_info.items()}}
 
 
-def run_bench(model=None, skeleton=None, up="y", *, particles: int = 200, iterations: int = 120,
+def run_bench(model=None, skeleton=None, up="auto", *, particles: int = 200, iterations: int = 120,
               backend: str = "both", echo: Callable[[str], None] = print) -> list[dict]:
     """Print the timing table of each model (see the module docstring).
 

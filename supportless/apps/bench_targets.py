@@ -52,7 +52,8 @@ def _missing(case: str) -> str | None:
 
 def _prepare(case: str, cache_dir: str):
     """The rig of a case, prepared into ``cache_dir``."""
-    from ..rig.rig import load_rig, prepare_rig
+    from ..rig.load import load_rig
+    from ..rig.rig import prepare_rig
 
     if case == "character":
         from ..shapes.character import character

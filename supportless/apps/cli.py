@@ -26,16 +26,19 @@ from .cli_common import (
     EXIT_INTERRUPTED,
     EXIT_MISSING_TOOL,
     EXIT_WRITE_FAILED,
+    UP_HELP,
     _console,
     _fail,
     _Group,
     _load,
-    _printer_profile,
     _require_slicer,
     _say_frame,
     _search_options,
     _settings,
+    _slicer_missing,
+    _slicer_setup,
     rig_options,
+    slicer_options,
 )
 
 __all__ = ["main"]
@@ -233,11 +236,11 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
 @click.option("--pictures", type=click.Path(file_okay=False), default=None,
               help="Folder for before/after pictures and the convergence plot.")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
-              help="Slice the rest pose and the written file with PrusaSlicer (needs prusa-slicer).")
+              help="Slice the rest pose and the written file with the slicer (--slicer; PrusaSlicer by default).")
 @click.option("--slice-rank", "slice_rank_count", type=click.IntRange(min=0), default=None,
               help="Slice up to K of the best answers (the search's, the best pose as it stands, the best turned "
-                   "rest pose; by predicted support) with PrusaSlicer, two at a time, and keep the one with the "
-                   "least support. Default: 4 when PrusaSlicer is found, else the slicer model chooses. "
+                   "rest pose; by predicted support) with the slicer, two at a time, and keep the one with the "
+                   "least support. Default: 4 when the slicer is found, else the slicer model chooses. "
                    "0: no choice, the search's own best.")
 @click.option("--pareto", "pareto_count", type=click.IntRange(min=2), default=None,
               help="Also return up to N poses along the front of least support against least distortion: "
@@ -246,9 +249,10 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
               help="How the front is found: NSGA-II after the single search, or a sweep of the distortion weight.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 @click.option("--verbose", "-v", is_flag=True, help="Also show the support estimates (prisms, columns, predicted).")
+@slicer_options
 def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, output, upright_out,
              report_path, pose, pictures, slice_check_flag, slice_rank_count, pareto_count, pareto_method, quiet,
-             verbose, **search_options):
+             verbose, slicer, support, cura_definitions, **search_options):
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from ..report.report import build_report
 
@@ -266,13 +270,13 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
         front_files = [("--pareto", f) for f in (*meshes, *poses, gallery)]
     check_output_paths([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose),
                     ("--skeleton-out", skeleton_out), *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
-    profile = _printer_profile(profile_path)
+    choice, profile = _slicer_setup(slicer, support, cura_definitions, profile_path)
     settings = _settings(profile, **search_options)
     if slice_rank_count == 0:
         settings = settings.replace(choose=False)
     console = _console()
     if slice_rank_count:
-        _require_slicer("--slice-rank")
+        _require_slicer("--slice-rank", choice)
     _check_bones_early(settings, model, skeleton)
     rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units,
                        bones=bones, skeleton_out=skeleton_out)
@@ -289,7 +293,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
         extra = {"printer_profile": profile.summary()}
         sliced = False
         if not result.interrupted and front is None:
-            result, sliced = _slice_choice(rig, result, slice_rank_count, console, profile, frame, quiet)
+            result, sliced = _slice_choice(rig, result, slice_rank_count, console, profile, frame, quiet, choice)
         if front is not None:
             from .pareto import write_front
 
@@ -302,10 +306,11 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
             written += front_written
     stopped = result.interrupted or interrupt_requested()
     if slice_check_flag and not failed and not stopped:  # the slicer's figures lead the summary
-        report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile)
+        report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile,
+                                   choice=choice)
     _print_results(console, report, verbose)  # after the files: a closed stdout (| head) loses nothing
     if result.choice is not None:
-        _print_choice(console, result.choice, slicer_tried=sliced)
+        _print_choice(console, result.choice, slicer_tried=sliced, label=choice.label)
     if result.stats.get("fell_back_to_rest"):
         turned = not np.allclose(result.rotation, np.eye(rig.dim))
         click.echo(f"supportless: warning: {rig.name}: the pose found crosses itself as written "
@@ -328,27 +333,28 @@ def _check_bones_early(settings, model, skeleton) -> None:
         settings.check_bones(len(read_tgf(tgf)[1]))
 
 
-def _slice_choice(rig, result, count, console, profile, frame, quiet=False):
-    """PrusaSlicer's choice among the best answers (:func:`supportless.slicing.ranking.slice_choice`).
+def _slice_choice(rig, result, count, console, profile, frame, quiet=False, choice=None):
+    """The slicer's choice among the best answers (:func:`supportless.slicing.ranking.slice_choice`).
 
-    ``count`` None: :data:`~supportless.slicing.ranking.SLICE_RANK` answers when PrusaSlicer is found and the search
-    weighed simpler answers (its default), else the slicer model's choice stands. Returns the result and
-    whether PrusaSlicer was asked.
+    ``count`` None: :data:`~supportless.slicing.ranking.SLICE_RANK` answers when the slicer (``choice``, default
+    PrusaSlicer) is found and the search weighed simpler answers (its default), else the slicer model's choice
+    stands. Returns the result and whether the slicer was asked.
     """
-    from ..slicing.prusaslicer import SlicerError, find_prusa_slicer
+    from ..slicing.prusaslicer import SlicerError
     from ..slicing.ranking import SLICE_RANK, slice_choice
 
+    label = choice.label if choice is not None else "PrusaSlicer"
     if count is None:
-        count = SLICE_RANK if result.choice is not None and find_prusa_slicer() else 0
+        count = SLICE_RANK if result.choice is not None and _slicer_missing(choice) is None else 0
     if count:
         from ..base.crash import stage
 
         stage("slicing")
         if not quiet:
-            console.print(f"choosing among the best answers: slicing up to {count} with PrusaSlicer, two at a "
+            console.print(f"choosing among the best answers: slicing up to {count} with {label}, two at a "
                           "time ...")
         try:
-            result = slice_choice(rig, result, count, profile=profile, height_mm=frame.height_mm)
+            result = slice_choice(rig, result, count, profile=profile, height_mm=frame.height_mm, choice=choice)
         except SlicerError as exc:
             if interrupt_requested():  # Ctrl-C reached the slicer too: keep the model's choice
                 console.print("[yellow]interrupted: slicing skipped, writing the slicer model's choice[/yellow]")
@@ -358,15 +364,15 @@ def _slice_choice(rig, result, count, console, profile, frame, quiet=False):
     return result, bool(count)
 
 
-def _print_choice(console, choice, slicer_tried):
+def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
     """One line per answer weighed, and who chose."""
     for i, c in enumerate(choice.candidates):
-        sliced = "" if c.sliced_mm is None else f", PrusaSlicer {c.sliced_mm:.0f} mm"
+        sliced = "" if c.sliced_mm is None else f", {label} {c.sliced_mm:.0f} mm"
         mark = ("  <- chosen" if i == choice.chosen else "") + \
             ("" if c.same_as is None else f"  (prints as answer {c.same_as + 1})")
         console.print(f"  {i + 1}. {c.kind:<13} predicted {c.predicted_mm:6.0f} mm{sliced}{mark}")
-    who = "PrusaSlicer" if choice.by == "slicer" else "the slicer model" + \
-        ("" if slicer_tried else " (PrusaSlicer not found or not asked for: nothing sliced)")
+    who = label if choice.by == "slicer" else "the slicer model" + \
+        ("" if slicer_tried else f" ({label} not found or not asked for: nothing sliced)")
     console.print(f"  chosen by {who}: {choice.reason}")
 
 
@@ -379,8 +385,10 @@ def _print_results(console, report, verbose=False):
     console.print(f"search took {report['runtime_seconds']:.1f} s")
 
 
-def _slice_and_report(rig, result, report, report_path, console, frame, printed=None, required=True, profile=None):
-    """Slice the rest pose and the file written for printing with PrusaSlicer, after every output is written.
+def _slice_and_report(rig, result, report, report_path, console, frame, printed=None, required=True, profile=None,
+                      choice=None):
+    """Slice the rest pose and the file written for printing with the slicer (``choice``, default PrusaSlicer),
+    after every output is written.
 
     The rest pose is sliced in the print frame ``frame``; the found pose is
     ``printed`` itself, read back as a user's slicer opens it, when it is a
@@ -392,21 +400,23 @@ def _slice_and_report(rig, result, report, report_path, console, frame, printed=
     """
     from ..files.meshes import read_mesh, write_json
     from ..report.report import support_headline
-    from ..slicing.prusaslicer import SlicerError, find_prusa_slicer, slice_check
+    from ..slicing.prusaslicer import SlicerError, slice_check
 
-    if not find_prusa_slicer():
-        message = "PrusaSlicer not found: no slicer check (apt-get install prusa-slicer to add it)"
+    missing = _slicer_missing(choice)
+    if missing:
+        message = f"{missing}: no slicer check"
         if required:
             click.echo(f"supportless: error: {message}; the other outputs are written", err=True)
             sys.exit(EXIT_MISSING_TOOL)
         console.print(message)
         return report
-    console.print("slicing the rest pose and the written file as printed with PrusaSlicer ...")
+    label = choice.label if choice is not None else "PrusaSlicer"
+    console.print(f"slicing the rest pose and the written file as printed with {label} ...")
     from_file = printed is not None and Path(printed).suffix.lower() in (".stl", ".3mf", ".obj", ".ply", ".off")
     try:
         posed = read_mesh(printed) if from_file else (frame.place(result.print_vertices), rig.faces)
         sliced = slice_check((frame.place(rig.vertices), rig.faces), posed, up=(0.0, 0.0, 1.0), height_mm=None,
-                             profile=profile).to_dict()
+                             profile=profile, choice=choice).to_dict()
     except SlicerError as exc:
         click.echo(f"supportless: error: slice check failed: {exc}; the other outputs are written", err=True)
         sys.exit(EXIT_MISSING_TOOL)
@@ -493,38 +503,43 @@ def _grams_and_time(side: dict) -> str:
 @main.command(name="slice-check")
 @click.argument("original", type=click.Path(dir_okay=False))
 @click.argument("posed", type=click.Path(dir_okay=False))
-@click.option("--up", default="y", show_default=True, help="Printing direction of ORIGINAL.")
+@click.option("--up", default="auto", show_default=True, help="Printing direction of ORIGINAL. " + UP_HELP)
 @click.option("--height-mm", default=REFERENCE_HEIGHT_MM, show_default=True, type=click.FloatRange(min=1.0),
               help="ORIGINAL is scaled to this height along --up.")
 @click.option("--posed-as", type=click.Choice(["written", "original"]), default="written", show_default=True,
               help="written: POSED is a print file (as `optimize -o` writes it: +Z up, millimetres) and is sliced "
                    "as it is; original: POSED is in ORIGINAL's frame and units (its --up, the same scale).")
 @click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
-              help="PrusaSlicer config (.ini) to slice with [default: PrusaSlicer's defaults].")
+              help="PrusaSlicer config (.ini) or Cura definition / settings (.json) to slice with [default: the "
+                   "slicer's own defaults].")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
-def slice_check_cmd(original, posed, up, height_mm, posed_as, printer_profile, as_json):
-    """Measure the support PrusaSlicer lays down for ORIGINAL and POSED."""
+@slicer_options
+def slice_check_cmd(original, posed, up, height_mm, posed_as, printer_profile, as_json, slicer, support,
+                    cura_definitions):
+    """Measure the support a slicer (PrusaSlicer, or Cura's normal or tree supports) lays down for ORIGINAL and
+    POSED."""
     from ..base.geometry import parse_up
     from ..files.meshes import read_mesh
     from ..files.printframe import print_frame
+    from ..files.upaxis import guess_up
     from ..report.report import duration_text
     from ..slicing.prusaslicer import SlicerError, SlicerNotFound, slice_check
 
-    up_vec = parse_up(up)
-    profile = _printer_profile(printer_profile) if printer_profile else None
+    choice, profile = _slicer_setup(slicer, support, cura_definitions, printer_profile)
     (Vo, Fo), (Vp, Fp) = read_mesh(original), read_mesh(posed)
+    up_vec = guess_up(Vo, Fo, original)[0] if up.strip().lower() == "auto" else parse_up(up)
     frame = print_frame(Vo, up_vec, height_mm)
     placed = (frame.place(Vp) if posed_as == "original" else Vp, Fp)
     try:
         report = slice_check((frame.place(Vo), Fo), placed, up=(0.0, 0.0, 1.0), height_mm=None,
-                             profile=profile).to_dict()
+                             profile=profile if printer_profile else None, choice=choice).to_dict()
     except (SlicerNotFound, SlicerError) as exc:
         _fail(str(exc))
     if as_json:
         click.echo(json.dumps(report, indent=2))
         return
     b, a = report["before"], report["after"]
-    click.echo(f"support filament at {height_mm:g} mm tall (PrusaSlicer):")
+    click.echo(f"support filament at {height_mm:g} mm tall ({choice.label}):")
     click.echo(f"  original: {b['support_mm']:8.0f} mm  ({b['support_cm3']:.2f} cm3, {_grams_and_time(b)})")
     click.echo(f"  posed:    {a['support_mm']:8.0f} mm  ({a['support_cm3']:.2f} cm3, {_grams_and_time(a)})")
     if b["support_time_s"] is not None and a["support_time_s"] is not None:
@@ -555,7 +570,7 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     from ..files.printframe import rig_print_frame
     from ..report.render import render_mesh
     from ..report.report import build_report
-    from ..rig.rig import load_rig
+    from ..rig.load import load_rig
 
     settings = _settings(particles=particles, iterations=iterations, seed=seed)
     check_output_paths((), [("--out", out_dir)])
@@ -627,7 +642,7 @@ def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, ca
 @main.command()
 @click.argument("model", required=False, type=click.Path(dir_okay=False))
 @click.option("--skeleton", "-s", type=click.Path(dir_okay=False), default=None)
-@click.option("--up", default="y", show_default=True)
+@click.option("--up", default="auto", show_default=True, help=UP_HELP)
 @click.option("--particles", default=SearchSettings.particles, show_default=True,
               type=click.IntRange(*RANGES["particles"]))
 @click.option("--iterations", default=SearchSettings.iterations, show_default=True,

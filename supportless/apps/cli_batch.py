@@ -8,7 +8,17 @@ import time
 import click
 
 from ..files.paths import check_output_paths
-from .cli_common import EXIT_INTERRUPTED, _console, _fail, _printer_profile, _require_slicer, _search_options, _settings
+from .cli_common import (
+    EXIT_INTERRUPTED,
+    UP_HELP,
+    _console,
+    _fail,
+    _require_slicer,
+    _search_options,
+    _settings,
+    _slicer_setup,
+    slicer_options,
+)
 
 __all__ = ["batch"]
 
@@ -18,14 +28,14 @@ __all__ = ["batch"]
 @click.option("-o", "--out", "out_dir", type=click.Path(file_okay=False), required=True,
               help="Folder for OUT/X/ per model (mesh to print, pose, report, pictures), summary.csv and "
                    "contact_sheet.png.")
-@click.option("--up", default="y", show_default=True, help="Printing direction of the models: x|y|z|-x|-y|-z.")
+@click.option("--up", default="auto", show_default=True, help=UP_HELP)
 @click.option("--height-mm", type=click.FloatRange(min=0.01), default=None,
               help="Print each model's rest pose this tall along --up, in millimetres [default: 60]; the STL "
                    "is +Z up, in millimetres, on the plate.")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
               help="Rig cache shared by the workers (default: $SUPPORTLESS_CACHE or ~/.cache/supportless).")
 @click.option("--slice-check", "slice_check_flag", is_flag=True,
-              help="Also measure each model's support with PrusaSlicer (needs prusa-slicer on every worker).")
+              help="Also measure each model's support with the slicer (--slicer; needs it on every worker).")
 @click.option("--scheduler", default=None, help="tcp://HOST:PORT of a running Dask scheduler (default: a local "
                                                  "cluster of this machine's cores).")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
@@ -33,18 +43,19 @@ __all__ = ["batch"]
 @click.option("--force", is_flag=True, help="Pose models whose output folder is complete again.")
 @click.option("--quiet", "-q", is_flag=True, help="No progress bar.")
 @_search_options
+@slicer_options
 def batch(in_dir, out_dir, up, height_mm, cache_dir, slice_check_flag, scheduler, workers, force, quiet,
-          **search_options):
+          slicer, support, cura_definitions, **search_options):
     """Pose every model of IN_DIR (X.glb, or X.obj with X.tgf) into OUT_DIR; resumable."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .batch import find_models, run_batch
 
-    profile = _printer_profile(search_options.pop("printer_profile"))
+    choice, profile = _slicer_setup(slicer, support, cura_definitions, search_options.pop("printer_profile"))
     settings = _settings(profile, **search_options)
     check_output_paths((), [("-o", out_dir)], ())
     if slice_check_flag:
-        _require_slicer("--slice-check")
+        _require_slicer("--slice-check", choice)
     specs = find_models(in_dir)
     try:
         import dask.distributed  # noqa: F401
@@ -64,14 +75,15 @@ def batch(in_dir, out_dir, up, height_mm, cache_dir, slice_check_flag, scheduler
                                                    + (f": {row['reason']}" if row.get("reason") else ""))
             sliced = row.get("slicer_reduction") is not None  # the slicer's figure where it ran
             red = row.get("slicer_reduction") if sliced else row.get("predicted_reduction")
-            extra = (f", support {-100 * red:+.0f} % ({'PrusaSlicer' if sliced else 'predicted'})"
+            extra = (f", support {-100 * red:+.0f} % ({choice.label if sliced else 'predicted'})"
                      if red is not None and row["status"] == "ok" else "")
             progress.console.print(f"  {row['model']}: {what}{extra}")
             progress.advance(task)
 
         try:
             run_batch(in_dir, out_dir, settings.to_dict(), up=up, height_mm=height_mm, cache_dir=cache_dir,
-                      slice_check=slice_check_flag, scheduler=scheduler, workers=workers, force=force,
+                      slice_check=slice_check_flag and {**choice.to_dict(), "cura_definitions": choice.cura_definitions},
+                      scheduler=scheduler, workers=workers, force=force,
                       on_result=on_result)
         except KeyboardInterrupt:
             click.echo(f"supportless: interrupted: {counts['ok']} models finished are kept; run again to go on",

@@ -45,7 +45,7 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
     """
     from ..base.crash import stage
     from ..files.printframe import rig_print_frame
-    from ..rig.rig import load_rig
+    from ..rig.load import load_rig
 
     stage("preparing the rig")
 
@@ -72,9 +72,15 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
 def _say_frame(rig, frame, quiet=False) -> None:
     """The printed size in one line on stderr (unless ``quiet``); a size far from a figure's is a warning."""
     if not quiet:
+        if rig.info.get("up"):  # the printing direction guessed (--up auto)
+            click.echo(f"  {rig.info['up']}", err=True)
         click.echo(f"  {frame.note()}", err=True)
     if (unusual := frame.unusual()) is not None:
         click.echo(f"supportless: warning: {rig.name}: {unusual}", err=True)
+
+
+UP_HELP = ("Printing direction: x|y|z|-x|-y|-z, three numbers '0,1,0', or auto: the file format's convention "
+           "(STL/3MF +Z; OBJ/OFF/PLY/glTF +Y), or the flat base the model was cut to stand on.")
 
 
 def rig_options(f):
@@ -93,8 +99,7 @@ def rig_options(f):
                           "'skin' (its own weights, the default) or 'bbw' (recomputed).")(f)
     f = click.option("--tets", type=click.Path(dir_okay=False), default=None,
                      help="Precomputed tetrahedral mesh (.mesh) of the model.")(f)
-    f = click.option("--up", default="y", show_default=True,
-                     help="Printing direction: x|y|z|-x|-y|-z or three numbers '0,1,0'.")(f)
+    f = click.option("--up", default="auto", show_default=True, help=UP_HELP)(f)
     f = click.option("--skeleton-out", type=click.Path(dir_okay=False), default=None,
                      help="Write the skeleton used as TGF (e.g. one built from the shape, to edit and pass back "
                           "with --skeleton).")(f)
@@ -155,8 +160,9 @@ def _search_options(f):
                           "dense model, after the search on its simplified proxy, on the full surface; none "
                           "otherwise]."),
         click.option("--printer-profile", type=click.Path(dir_okay=False), default=None,
-                     help="PrusaSlicer config (.ini, File > Export > Export Config): the overhang threshold follows "
-                          "from it, and --slice-check slices with it. Default: PrusaSlicer's defaults."),
+                     help="PrusaSlicer config (.ini, File > Export > Export Config) or Cura definition / settings "
+                          "(.json): the overhang threshold follows from it, and the slicer slices with it. Default: "
+                          "the slicer's own defaults."),
         click.option("--overhang-angle", default=None, type=click.FloatRange(*RANGES["overhang_angle"]),
                      help="Overhang threshold, degrees from the build plate [default: the printer profile's: "
                           f"support_material_threshold + 1, or PrusaSlicer's automatic one, {d.overhang_angle:.1f} "
@@ -229,11 +235,60 @@ def _settings(profile=None, **options):
     return SearchSettings(**options)  # bad values are InputError: one line
 
 
-def _require_slicer(option: str) -> None:
-    """Exit with one line (status 3) before any work when PrusaSlicer is missing."""
+def slicer_options(f):
+    """``--slicer``, ``--support`` and ``--cura-definitions``: who measures the support, and which support."""
+    from ..slicing.choice import ENGINES, SUPPORTS
+
+    f = click.option("--cura-definitions", type=click.Path(file_okay=False), default=None,
+                     help="Folder of Cura's printer definitions (fdmprinter.def.json) [default: "
+                          "$SUPPORTLESS_CURA_DEFINITIONS, then the usual install locations].")(f)
+    f = click.option("--support", type=click.Choice(SUPPORTS), default="grid", show_default=True,
+                     help="Support the slicer lays down: grid (PrusaSlicer's; Cura's normal) or tree (Cura).")(f)
+    f = click.option("--slicer", type=click.Choice(ENGINES), default=None,
+                     help="Slicer that measures the support [default: PrusaSlicer if found, else Cura; cura for "
+                          "--support tree or a Cura .json --printer-profile].")(f)
+    return f
+
+
+def _slicer_setup(slicer, support, cura_definitions, profile_path):
+    """The :class:`~supportless.slicing.choice.SlicerChoice` and the printer profile of the options.
+
+    A Cura profile (``.json``) chooses Cura; Cura with no profile takes Cura's defaults, so the search's
+    overhang threshold is Cura's. A profile of the other slicer is one line and exit status 2.
+    """
+    from ..files.printer import cura_default_profile
+    from ..slicing.choice import choose_slicer
+
+    profile = _printer_profile(profile_path)
+    if slicer is None and profile.slicer == "cura":
+        slicer = "cura"
+    choice = choose_slicer(slicer, support, cura_definitions)
+    if profile_path is None and choice.engine == "cura":
+        profile = cura_default_profile()
+    if profile.slicer != choice.engine:
+        kind = "a Cura profile (.json)" if profile.slicer == "cura" else "a PrusaSlicer config (.ini)"
+        _fail(f"{profile_path}: {kind} goes with --slicer {profile.slicer}, not --slicer {choice.engine}")
+    return choice, profile
+
+
+def _slicer_missing(choice=None) -> str | None:
+    """One line saying what to install when the chosen slicer (default PrusaSlicer) is missing, else None."""
+    if choice is not None and choice.engine == "cura":
+        from ..slicing.cura import find_cura_definitions, find_cura_engine, missing_message
+
+        engine = find_cura_engine()
+        folder = find_cura_definitions(choice.cura_definitions) if engine else None
+        return None if engine and folder else missing_message(engine, folder, choice.cura_definitions)
     from ..slicing.prusaslicer import find_prusa_slicer
 
-    if not find_prusa_slicer():
-        click.echo(f"supportless: error: {option} needs PrusaSlicer, which was not found "
-                   "(apt-get install prusa-slicer, or set SUPPORTLESS_PRUSA_SLICER)", err=True)
+    return None if find_prusa_slicer() else ("PrusaSlicer not found (apt-get install prusa-slicer, or set "
+                                             "SUPPORTLESS_PRUSA_SLICER)")
+
+
+def _require_slicer(option: str, choice=None) -> None:
+    """Exit with one line (status 3) before any work when the chosen slicer (default PrusaSlicer) is missing."""
+    missing = _slicer_missing(choice)
+    if missing:
+        who = "PrusaSlicer" if choice is None or choice.engine == "prusa" else "Cura"
+        click.echo(f"supportless: error: {option} needs {who}: {missing}", err=True)
         sys.exit(EXIT_MISSING_TOOL)

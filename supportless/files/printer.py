@@ -31,9 +31,9 @@ from pathlib import Path
 
 from ..base.errors import InputError
 
-__all__ = ["DEFAULT_DENSITY", "DEFAULT_OVERHANG_ANGLE", "FILAMENT_DIAMETER_MM", "MAX_SEARCH_ANGLE", "OVERHANG_MARGIN",
+__all__ = ["CURA_DEFAULTS", "CURA_SUPPORT_ANGLE", "DEFAULT_DENSITY", "DEFAULT_OVERHANG_ANGLE", "FILAMENT_DIAMETER_MM", "MAX_SEARCH_ANGLE", "OVERHANG_MARGIN",
            "PRUSA_DEFAULTS", "PrinterProfile", "SEARCH_OVERHANG_ANGLE", "default_profile", "mm_to_cm3",
-           "overhang_threshold", "read_printer_profile", "search_angle"]
+           "cura_default_profile", "overhang_threshold", "read_cura_profile", "read_printer_profile", "search_angle"]
 
 #: PrusaSlicer's built-in defaults of the keys this tool reads (PrusaSlicer
 #: 2.5, no vendor preset): what a profile that lacks a key means.
@@ -51,6 +51,22 @@ PRUSA_DEFAULTS: dict[str, str] = {
     "support_material_buildplate_only": "0",
     "support_material_spacing": "2.5",
 }
+
+#: ``fdmprinter.def.json``'s defaults of the Cura settings this tool reads (Cura 4.13), but the filament,
+#: 1.75 mm as the tool slices with (:data:`supportless.slicing.cura.CURA_SETTINGS`).
+CURA_DEFAULTS: dict[str, str] = {
+    "support_angle": "50",
+    "layer_height": "0.1",
+    "layer_height_0": "0.3",
+    "machine_nozzle_size": "0.4",
+    "wall_line_width_0": "0.4",
+    "support_z_distance": "0.1",
+    "support_type": "everywhere",
+    "material_diameter": "1.75",
+}
+
+#: Cura's default ``support_angle`` (degrees from the vertical).
+CURA_SUPPORT_ANGLE = 50.0
 
 #: Density used for grams when the profile gives none (PLA, g/cm3).
 DEFAULT_DENSITY = 1.24
@@ -104,9 +120,13 @@ class PrinterProfile:
     filament_density : float
         g/cm3 (:data:`DEFAULT_DENSITY` when the profile says 0).
     path : str or None
-        The file read, or None for PrusaSlicer's defaults.
+        The file read, or None for the slicer's defaults.
     raw : dict of str -> str
-        Every ``key = value`` of the file.
+        Every ``key = value`` of the file (a Cura profile: every setting it overrides).
+    slicer : str
+        ``prusa`` (a PrusaSlicer config) or ``cura`` (a Cura definition or settings override, JSON).
+    support_angle : float
+        Cura's ``support_angle``: overhangs steeper than this from the vertical get support (Cura only).
     """
 
     layer_height: float = 0.3
@@ -120,6 +140,8 @@ class PrinterProfile:
     filament_density: float = DEFAULT_DENSITY
     path: str | None = None
     raw: dict = field(default_factory=dict, compare=False)
+    slicer: str = "prusa"
+    support_angle: float = CURA_SUPPORT_ANGLE
 
     @property
     def overhang_angle(self) -> float:
@@ -128,11 +150,15 @@ class PrinterProfile:
 
     @property
     def name(self) -> str:
-        """The file's name, or ``PrusaSlicer defaults``."""
-        return Path(self.path).name if self.path else "PrusaSlicer defaults"
+        """The file's name, or ``PrusaSlicer defaults`` / ``Cura defaults``."""
+        return Path(self.path).name if self.path else ("Cura defaults" if self.slicer == "cura" else "PrusaSlicer defaults")
 
     def summary(self) -> dict:
         """JSON-ready description for reports."""
+        if self.slicer == "cura":
+            return {"profile": self.path or self.name, "slicer": "cura", "layer_height": self.layer_height,
+                    "support_angle": self.support_angle, "overhang_angle": round(self.overhang_angle, 3),
+                    "support_buildplate_only": self.buildplate_only, "filament_density": self.filament_density}
         return {"profile": self.path or "PrusaSlicer defaults", "layer_height": self.layer_height,
                 "support_material_threshold": self.support_threshold,
                 "external_perimeter_width": round(self.external_perimeter_width, 6),
@@ -152,8 +178,11 @@ def overhang_threshold(profile: PrinterProfile) -> float:
     -------
     angle : float
         Degrees from the build plate: ``support_threshold + 1`` when it is
-        set, else ``atan(layer_height / (external_perimeter_width / 2))``.
+        set, else ``atan(layer_height / (external_perimeter_width / 2))``;
+        for a Cura profile ``90 - support_angle`` (Cura measures from the vertical).
     """
+    if profile.slicer == "cura":
+        return 90.0 - profile.support_angle
     if profile.support_threshold > 0:
         return min(profile.support_threshold + 1.0, 90.0)
     return math.degrees(math.atan2(profile.layer_height, profile.external_perimeter_width / 2.0))
@@ -188,7 +217,7 @@ def _profile_of(raw: dict, path: str | None, source: str) -> PrinterProfile:
 
 
 def read_printer_profile(path: str | os.PathLike) -> PrinterProfile:
-    """Read a PrusaSlicer config file (``.ini``).
+    """Read a PrusaSlicer config file (``.ini``), or a Cura profile (``.json``: :func:`read_cura_profile`).
 
     Parameters
     ----------
@@ -207,6 +236,8 @@ def read_printer_profile(path: str | os.PathLike) -> PrinterProfile:
         not a number: one line naming the file and the key.
     """
     source = str(path)
+    if Path(path).suffix.lower() == ".json":
+        return read_cura_profile(path)
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
@@ -231,6 +262,83 @@ def read_printer_profile(path: str | os.PathLike) -> PrinterProfile:
         raise InputError(source, "not a PrusaSlicer config: no key = value line; export one from PrusaSlicer "
                                  "with File > Export > Export Config")
     return _profile_of(raw, str(Path(path).resolve()), source)
+
+
+def cura_default_profile() -> PrinterProfile:
+    """Cura's own defaults (``fdmprinter``: supports from 50 degrees off the vertical, 0.1 mm layers): 40 degrees."""
+    return _cura_profile_of({}, None, "Cura defaults")
+
+
+def read_cura_profile(path: str | os.PathLike) -> PrinterProfile:
+    """Read a Cura printer definition or settings override (JSON).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A definition as Cura's ``definitions/*.def.json`` (settings under ``overrides``, each with a
+        ``default_value`` or a plain value), or a flat ``{"setting": value}`` object.
+
+    Returns
+    -------
+    profile : PrinterProfile
+        ``slicer = "cura"``; settings the file lacks take ``fdmprinter``'s defaults
+        (:data:`CURA_DEFAULTS`); ``raw`` holds every setting it gives, for CuraEngine.
+
+    Raises
+    ------
+    InputError
+        Not JSON, not an object, or a setting this tool reads is not a number.
+    """
+    import json
+
+    source = str(path)
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8-sig"))
+    except OSError as exc:
+        raise InputError(source, f"cannot read the printer profile ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise InputError(source, f"not a Cura profile: not JSON ({exc}); give a Cura definition (.def.json) or "
+                                 "an object of settings") from None
+    if not isinstance(data, dict):
+        raise InputError(source, "not a Cura profile: the JSON is not an object of settings")
+    entries = data.get("overrides", data if "metadata" not in data and "inherits" not in data else {})
+    if not isinstance(entries, dict):
+        raise InputError(source, "not a Cura profile: 'overrides' is not an object")
+    raw = {}
+    for key, value in entries.items():
+        if isinstance(value, dict):
+            if "default_value" not in value:
+                continue  # a formula ("value") only Cura's front end evaluates
+            value = value["default_value"]
+        raw[str(key)] = str(value).lower() if isinstance(value, bool) else str(value)
+    return _cura_profile_of(raw, str(Path(path).resolve()), source)
+
+
+def _cura_profile_of(raw: dict, path: str | None, source: str) -> PrinterProfile:
+    def number(key):
+        text = raw.get(key, CURA_DEFAULTS[key])
+        try:
+            value = float(text)
+        except ValueError:
+            raise InputError(source, f"{key} = {text!r} is not a number") from None
+        if not math.isfinite(value) or value < 0:
+            raise InputError(source, f"{key} = {text} must be a finite number >= 0")
+        return value
+
+    angle = number("support_angle")
+    if angle > 90:
+        raise InputError(source, f"support_angle = {angle:g} is not within 0..90 degrees")
+    layer = number("layer_height")
+    if layer <= 0:
+        raise InputError(source, "layer_height must be above 0")
+    nozzle = number("machine_nozzle_size") or 0.4
+    return PrinterProfile(
+        layer_height=layer, first_layer_height=number("layer_height_0"), nozzle_diameter=nozzle,
+        external_perimeter_width=number("wall_line_width_0") or nozzle,
+        support_contact_distance=number("support_z_distance"),
+        buildplate_only=raw.get("support_type", CURA_DEFAULTS["support_type"]).strip() == "buildplate",
+        filament_diameter=number("material_diameter"), path=path, raw=dict(raw), slicer="cura",
+        support_angle=angle)
 
 
 def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:

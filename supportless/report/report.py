@@ -28,7 +28,7 @@ from ..search.orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
 __all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
-           "support_headline", "write_pictures"]
+           "slicer_label", "support_headline", "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -253,7 +253,7 @@ def support_headline(report: dict) -> dict | None:
     Returns
     -------
     headline : dict or None
-        ``source`` ("PrusaSlicer" or "predicted"), ``height_mm``,
+        ``source`` (the slicer, :func:`slicer_label`, or "predicted"), ``height_mm``,
         ``before_mm``/``after_mm`` (filament), ``before_g``/``after_g``,
         ``before_time_s``/``after_time_s`` (printing time the supports add;
         None without a slicer), ``reduction_percent`` and ``line`` (the
@@ -262,7 +262,7 @@ def support_headline(report: dict) -> dict | None:
     sliced, predicted = report.get("slice_check"), report.get("predicted_slicer")
     if sliced:
         b, a = sliced["before"], sliced["after"]
-        out = {"source": "PrusaSlicer", "height_mm": sliced["height_mm"], "before_mm": b["support_mm"],
+        out = {"source": slicer_label(sliced), "height_mm": sliced["height_mm"], "before_mm": b["support_mm"],
                "after_mm": a["support_mm"], "before_g": b.get("support_g"), "after_g": a.get("support_g"),
                "before_time_s": b.get("support_time_s"), "after_time_s": a.get("support_time_s")}
     elif predicted:
@@ -277,6 +277,13 @@ def support_headline(report: dict) -> dict | None:
     return out
 
 
+def slicer_label(sliced: dict) -> str:
+    """``PrusaSlicer``, ``Cura`` or ``Cura, tree supports``: who measured a ``slice_check`` report."""
+    if sliced.get("engine", "prusa") == "prusa":
+        return "PrusaSlicer"
+    return "Cura, tree supports" if sliced.get("support") == "tree" else "Cura"
+
+
 def _headline_text(h: dict) -> str:
     def side(g, mm, t, first):
         text = f"{g:.1f} g" if g is not None else "? g"
@@ -285,7 +292,7 @@ def _headline_text(h: dict) -> str:
 
     red = h["reduction_percent"]
     change = ("no support before" if red is None else f"{red:.0f} % less" if red >= 0 else f"{-red:.0f} % more")
-    source = ("PrusaSlicer" if h["source"] == "PrusaSlicer"
+    source = (h["source"] if h["source"] != "predicted"
               else "predicted for PrusaSlicer, an estimate (--slice-check measures it)")
     return (f"support {side(h['before_g'], h['before_mm'], h['before_time_s'], True)} -> "
             f"{side(h['after_g'], h['after_mm'], h['after_time_s'], False)}: {change} "

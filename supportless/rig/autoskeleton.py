@@ -30,7 +30,7 @@ from scipy.sparse.csgraph import minimum_spanning_tree
 
 from ..base.errors import InputError
 
-__all__ = ["BONE_RANGE", "GRID_CELLS", "TWIG_SHARE", "auto_skeleton", "bones_from_tree", "curve_skeleton",
+__all__ = ["BONE_RANGE", "GRID_CELLS", "TWIG_SHARE", "auto_skeleton", "planar_skeleton", "bones_from_tree", "curve_skeleton",
            "inside_joints", "surface_graph"]
 
 #: Grid cells along the longest side of the model for the graph the skeleton is computed on.
@@ -317,6 +317,54 @@ def auto_skeleton(vertices: np.ndarray, faces: np.ndarray, up, bones: tuple | in
     nodes, tree = curve_skeleton(*surface_graph(V, F))
     J, B = bones_from_tree(nodes, tree, height, wanted, centre=V.mean(axis=0))
     return inside_joints(V, F, J, B)
+
+
+def planar_skeleton(vertices: np.ndarray, faces: np.ndarray, up, bones: tuple | int | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """A skeleton for a planar figure (the paper's 2D mode) that has none: that of the figure extruded.
+
+    The figure becomes a slab as thick as its limbs are wide (twice its area
+    over its outline's length: a strip of width w gives w), whose curve
+    skeleton (:func:`auto_skeleton`) lies in the middle plane; its joints are
+    put back on the plane.
+
+    Parameters
+    ----------
+    vertices : (n, 2) or (n, 3) float64
+        z = 0 when three columns.
+    faces : (f, 3) int64
+        A triangulated region (one piece, its outline its boundary edges).
+    up : (2,) or (3,) float64
+        The printing direction, in the plane.
+    bones : int or (int, int), optional
+        As for :func:`auto_skeleton`.
+
+    Returns
+    -------
+    joints : (j, d) float64
+        As many columns as ``vertices``; inside the figure.
+    bone_pairs : (m, 2) int64
+    """
+    V2 = np.asarray(vertices, np.float64)[:, :2]
+    F = np.asarray(faces, np.int64)
+    e1, e2 = V2[F[:, 1]] - V2[F[:, 0]], V2[F[:, 2]] - V2[F[:, 0]]
+    signed = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    F = np.where((signed > 0)[:, None], F, F[:, [0, 2, 1]])  # every triangle counter-clockwise
+    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    key = np.sort(directed, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    outline = directed[counts[inverse.ravel()] == 1]
+    length = float(np.linalg.norm(V2[outline[:, 1]] - V2[outline[:, 0]], axis=1).sum())
+    thickness = (float(np.abs(signed).sum()) / length) if length > 0 else float(np.ptp(V2, axis=0).max()) * 0.05
+    n = len(V2)
+    slab = np.vstack([np.column_stack([V2, np.full(n, thickness / 2)]), np.column_stack([V2, np.full(n, -thickness / 2)])])
+    a, b = outline[:, 0], outline[:, 1]
+    walls = np.vstack([np.column_stack([b, a, a + n]), np.column_stack([b, a + n, b + n])])
+    slab_faces = np.vstack([F, F[:, [0, 2, 1]] + n, walls])
+    up3 = np.zeros(3)
+    up3[:2] = np.asarray(up, np.float64).ravel()[:2]
+    J, B = auto_skeleton(slab, slab_faces, up3, bones)
+    return J[:, :np.asarray(vertices).shape[1]] * ([1.0, 1.0, 0.0][:np.asarray(vertices).shape[1]]), B
 
 
 def inside_joints(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, bones: np.ndarray

@@ -36,6 +36,7 @@ from ..files.meshes import check_mesh_arrays, read_mesh, write_mesh
 from ..files.printer import DEFAULT_DENSITY, PrinterProfile
 from ..files.printframe import REFERENCE_HEIGHT_MM, place_vertices, rotation_to_z
 from ..report.report import reduction
+from .cura import cura_version
 from .gcode import (
     FILAMENT_DIAMETER_MM,
     SUPPORT_FEATURES,
@@ -45,6 +46,7 @@ from .gcode import (
     parse_print_time,
     read_gcode_tail,
 )
+from .jobs import Job, run_jobs
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
@@ -228,79 +230,6 @@ def _config_args(config: Mapping[str, str]) -> list[str]:
     return args
 
 
-@dataclass
-class _Job:
-    """One PrusaSlicer run: its command, its G-code file and, beside it, its ``.out.log`` / ``.err.log``."""
-
-    label: str
-    cmd: list[str]
-    gcode: Path
-    proc: subprocess.Popen | None = None
-    started: float = 0.0
-    elapsed: float = 0.0
-
-    def log(self, stream: str) -> Path:
-        """The log file of ``stream`` (``"out"`` or ``"err"``)."""
-        return self.gcode.with_suffix(f".{stream}.log")
-
-
-def _run_jobs(jobs: list[_Job], workers: int, timeout: float) -> None:
-    """Run PrusaSlicer jobs in parallel.
-
-    Parameters
-    ----------
-    jobs : list of _Job
-        Their ``proc``, ``started`` and ``elapsed`` are filled in.
-    workers : int
-        Jobs running at a time.
-    timeout : float
-        Seconds allowed for each job.
-
-    Raises
-    ------
-    SlicerError
-        On the first failure or timeout, after every running job is killed.
-    """
-    pending, running = list(jobs), []
-    try:
-        while pending or running:
-            while pending and len(running) < workers:
-                j = pending.pop(0)
-                with open(j.log("out"), "wb") as out, open(j.log("err"), "wb") as err:
-                    try:
-                        j.proc = subprocess.Popen(j.cmd, stdout=out, stderr=err, stdin=subprocess.DEVNULL)
-                    except OSError as e:
-                        raise SlicerError(f"cannot run PrusaSlicer ({j.cmd[0]}): {e}") from None
-                j.started = time.monotonic()
-                running.append(j)
-            time.sleep(0.02)
-            now = time.monotonic()
-            for j in list(running):
-                rc = j.proc.poll()
-                if rc is None:
-                    if now - j.started > timeout:
-                        raise SlicerError(f"PrusaSlicer timed out after {timeout:g} s slicing {j.label} "
-                                          "(raise the timeout, or use a coarser config / smaller mesh)")
-                    continue
-                j.elapsed = now - j.started
-                running.remove(j)
-                if rc != 0 or not j.gcode.is_file():
-                    line = _last_error_line(j.log("err").read_text(errors="replace"),
-                                            j.log("out").read_text(errors="replace"))
-                    hint = " (needs a display? see supportless.slicing.prusaslicer: xvfb-run)" \
-                        if re.search(r"display|gtk|x11", line, re.I) else ""
-                    raise SlicerError(f"PrusaSlicer failed slicing {j.label} (exit {rc}): {line}{hint}")
-    finally:
-        for j in running:
-            if j.proc.poll() is None:
-                j.proc.kill()
-        for j in running:
-            try:
-                j.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                pass
-
-
 # --------------------------------------------------------------------------- #
 # public API
 # --------------------------------------------------------------------------- #
@@ -342,6 +271,8 @@ class SliceReport:
     filament_diameter_mm: float = FILAMENT_DIAMETER_MM
     slicer: str = ""
     slicer_version: str = ""
+    engine: str = "prusa"
+    support: str = "grid"
     config: dict[str, str] = field(default_factory=dict)
     support_options: list[str] = field(default_factory=lambda: list(SUPPORT_OPTIONS))
     slices: dict[str, dict] = field(default_factory=dict)
@@ -357,7 +288,7 @@ class SliceReport:
             "support_time_s", "total_mm", "total_cm3", "model_mm", "size_mm"},
             "after": {...}, "reduction_percent", "up",
             "height_mm", "scale", "filament_diameter_mm", "slicer",
-            "slicer_version", "config", "support_options", "slices",
+            "slicer_version", "engine" (``prusa`` or ``cura``), "support" (``grid`` or ``tree``), "config", "support_options", "slices",
             "elapsed_s"}``; non-finite numbers become None.
         """
         flat = asdict(self)
@@ -404,7 +335,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
                   *, config: Mapping[str, str] | str | None = None, workers: int | None = None,
                   slicer: str | None = None, keep_dir: str | os.PathLike | None = None,
                   profile: PrinterProfile | None = None, names: Sequence[str] | None = None,
-                  by_feature: bool = False) -> SupportSlices:
+                  by_feature: bool = False, choice=None) -> SupportSlices:
     """Slice meshes with and without supports; the support filament of each.
 
     Parameters
@@ -427,7 +358,11 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         from the G-code's support features (:func:`~supportless.slicing.gcode.feature_filament`)
         instead of the difference with a slice without supports: half the
         PrusaSlicer runs. The two agree within the skirt's few mm (the bunny
-        at 60 mm: 3345 mm against 3360 mm).
+        at 60 mm: 3345 mm against 3360 mm). PrusaSlicer only.
+    choice : supportless.slicing.choice.SlicerChoice, optional
+        The slicer and support (default PrusaSlicer's grid): with Cura
+        (:func:`~supportless.slicing.cura.slice_with_cura`) ``slicer`` is
+        CuraEngine, ``config`` is ignored and a Cura profile's settings are given.
 
     Returns
     -------
@@ -438,14 +373,26 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
     SlicerNotFound, SlicerError, InputError
         As :func:`slice_check`.
     """
-    exe = slicer or find_prusa_slicer()
-    if exe is None:
+    cura = getattr(choice, "engine", "prusa") == "cura"
+    exe = slicer or (None if cura else find_prusa_slicer())
+    if exe is None and not cura:
         raise SlicerNotFound()
     if not scale > 0:
         raise ValueError("scale must be positive")
     names = list(names) if names is not None else [f"mesh-{i}" for i in range(len(meshes))]
     if len(names) != len(meshes):
         raise ValueError("names must have one label per mesh")
+    if cura:
+        from .cura import slice_with_cura
+
+        placed = [(place_vertices(V, up, scale), F) for V, F in (_load_mesh(m, n) for n, m in zip(names, meshes))]
+        settings = profile.raw if profile is not None and profile.slicer == "cura" else None
+        out, exe, cfg = slice_with_cura(placed, names, choice.support, timeout=timeout, keep_dir=keep_dir, engine=exe,
+                                        workers=workers or max(1, min(2, os.cpu_count() or 1)),
+                                        definitions=choice.cura_definitions, settings=settings)
+        return SupportSlices(meshes=out, slicer=exe, config=cfg)
+    if profile is not None and profile.slicer != "prusa":
+        raise InputError(profile.path, "a Cura profile goes with --slicer cura")
     from_file = profile is not None and profile.path is not None
     if from_file:
         config = {}
@@ -482,8 +429,8 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
                 gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
                 cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
                        "--output", str(gcode), str(stl)]
-                jobs.append(_Job(f"{label} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
-        _run_jobs(jobs, workers, float(timeout))
+                jobs.append(Job(f"{label} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
+        run_jobs(jobs, workers, float(timeout), last_line=_last_error_line)
         runs = []
         for j in jobs:
             tail = read_gcode_tail(j.gcode)
@@ -509,7 +456,8 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
 def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1, 0), height_mm: float | None = REFERENCE_HEIGHT_MM,
                 timeout: float = DEFAULT_TIMEOUT_S, *, config: Mapping[str, str] | str | None = None,
                 workers: int | None = None, slicer: str | None = None,
-                keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None) -> SliceReport:
+                keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None,
+                choice=None) -> SliceReport:
     """Slice the original and the posed mesh with and without supports and compare.
 
     Parameters
@@ -537,7 +485,9 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     profile : PrinterProfile, optional
         A printer profile read from a file (:func:`supportless.files.printer.read_printer_profile`):
         PrusaSlicer loads the file itself (``--load``) and ``config`` is
-        ignored; only the bed is set to fit the meshes.
+        ignored; only the bed is set to fit the meshes. A Cura profile's settings go to CuraEngine.
+    choice : supportless.slicing.choice.SlicerChoice, optional
+        The slicer and its support (default: PrusaSlicer, grid); ``slicer`` is then that slicer's executable.
 
     Returns
     -------
@@ -553,8 +503,9 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         A mesh that cannot be read or is not a valid triangle mesh.
     """
     t0 = time.monotonic()
-    exe = slicer or find_prusa_slicer()
-    if exe is None:
+    engine, support = getattr(choice, "engine", "prusa"), getattr(choice, "support", "grid")
+    exe = slicer or (find_prusa_slicer() if engine == "prusa" else None)
+    if exe is None and engine == "prusa":
         raise SlicerNotFound()
     if height_mm is not None and not height_mm > 0:
         raise ValueError("height_mm must be positive")
@@ -564,8 +515,8 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     if height_mm is None:
         height_mm = float(np.ptp(Vo @ rotation_to_z(up)[2]))
     sliced = slice_support([(Vo, Fo), (Vp, Fp)], up, s, timeout, config=config, workers=workers, slicer=exe,
-                           keep_dir=keep_dir, profile=profile, names=("original", "posed"))
-    cfg = sliced.config
+                           keep_dir=keep_dir, profile=profile, names=("original", "posed"), choice=choice)
+    cfg, exe = sliced.config, sliced.slicer
     from_file = profile is not None and profile.path is not None
     results = {f"{name}-{kind}": run[kind] for name, run in zip(("original", "posed"), sliced.meshes)
                for kind in ("support", "nosupport")}
@@ -578,8 +529,7 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         t1, t0 = results[f"{name}-support"]["print_seconds"], results[f"{name}-nosupport"]["print_seconds"]
         return None if t1 is None or t0 is None else t1 - t0
 
-    before = filament("original-support") - filament("original-nosupport")
-    after = filament("posed-support") - filament("posed-nosupport")
+    before, after = meshes["original"]["support_mm"], meshes["posed"]["support_mm"]  # with minus without
     diameter = profile.filament_diameter if profile is not None else FILAMENT_DIAMETER_MM
     density = profile.filament_density if profile is not None else DEFAULT_DENSITY
     return SliceReport(
@@ -607,9 +557,12 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         size_mm_before=meshes["original"]["size_mm"],
         size_mm_after=meshes["posed"]["size_mm"],
         slicer=exe,
-        slicer_version=_slicer_version(exe),
+        slicer_version=_slicer_version(exe) if engine == "prusa" else cura_version(exe),
+        engine=engine,
+        support=support,
         config=dict(profile.raw) if from_file else dict(cfg),
-        support_options=list(SUPPORT_OPTIONS),
+        support_options=list(SUPPORT_OPTIONS) if engine == "prusa" else
+        ["support_enable=true", f"support_structure={cfg['support_structure']}"],
         slices=results,
         elapsed_s=time.monotonic() - t0,
     )

@@ -27,6 +27,7 @@ from ..rig.rig import Rig
 from ..search.choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from ..search.optimizer import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
 from ..search.result import as_written
+from .choice import SlicerChoice
 from .prusaslicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
 __all__ = ["SLICER_NOISE", "SLICE_RANK", "SLICE_WINDOW", "distinct_poses", "pick_sliced", "slice_choice",
@@ -96,8 +97,9 @@ def to_slice(choice: Choice, count: int, window: float = SLICE_WINDOW) -> list[i
 def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, height_mm: float = REFERENCE_HEIGHT_MM,
                  profile: PrinterProfile | None = None, config: dict | str | None = None, workers: int = 2,
                  slicer: str | None = None, timeout: float = DEFAULT_TIMEOUT_S, window: float = SLICE_WINDOW,
-                 per_kind: int = PER_KIND, slice_fn: Callable[..., object] | None = None) -> PoseResult:
-    """Slice the best few answers and return the one with the least support by PrusaSlicer.
+                 per_kind: int = PER_KIND, slice_fn: Callable[..., object] | None = None,
+                 choice: SlicerChoice | None = None) -> PoseResult:
+    """Slice the best few answers and return the one with the least support by the slicer (PrusaSlicer's default).
 
     Parameters
     ----------
@@ -121,6 +123,8 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     slice_fn : callable, optional
         Replaces :func:`supportless.slicing.prusaslicer.slice_support` (same arguments,
         returns an object with ``support_mm``: a list of floats), for tests.
+    choice : SlicerChoice, optional
+        The slicer and support to measure with (default PrusaSlicer's grid).
 
     Returns
     -------
@@ -134,7 +138,7 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     SlicerNotFound, SlicerError
         As :func:`supportless.slicing.prusaslicer.slice_support`.
     """
-    choice = result.choice or choose(rig, result, per_kind, height_mm=height_mm).choice
+    slicer_choice, choice = choice, result.choice or choose(rig, result, per_kind, height_mm=height_mm).choice
     picked = to_slice(choice, count, window)
     if len(picked) < 2:
         reason = (f"{choice.reason}; no other answer is predicted within {100 * window:g} % of the rest pose's "
@@ -147,7 +151,8 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     poses = [choice.candidates[i].result for i in picked]
     sliced = (slice_fn or slice_support)([(p.print_vertices, rig.faces) for p in poses], rig.up, scale, timeout,
                                          config=config, workers=workers, slicer=slicer, profile=profile,
-                                         names=[f"answer-{i + 1}" for i in picked], by_feature=True)
+                                         names=[f"answer-{i + 1}" for i in picked], by_feature=True,
+                                         choice=slicer_choice)
     candidates = [dataclasses.replace(c) for c in choice.candidates]
     for i, mm in zip(picked, sliced.support_mm):
         candidates[i].sliced_mm = float(mm)

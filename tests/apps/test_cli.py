@@ -166,7 +166,8 @@ def test_slice_check_without_the_slicer_keeps_every_output(branch_files, tmp_pat
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
                  "--iterations", 1, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json",
                  "--report", tmp_path / "report.json", "--slice-check",
-                 env={"SUPPORTLESS_PRUSA_SLICER": str(tmp_path / "no-such-slicer")})
+                 env={"SUPPORTLESS_PRUSA_SLICER": str(tmp_path / "no-such-slicer"),
+                      "SUPPORTLESS_CURA_ENGINE": str(tmp_path / "no-such-engine")})
     assert result.exit_code == 3, (result.output, result.exception)
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "PrusaSlicer not found" in lines[0] and "apt-get install prusa-slicer" in lines[0]

@@ -20,7 +20,7 @@ from supportless.apps.ui import App, find_free_port
 from supportless.base.errors import InputError
 from supportless.base.geometry import print_pose, print_transform
 from supportless.files import posefile
-from supportless.rig.rig import load_rig
+from supportless.rig.load import load_rig
 from supportless.search.orientation import rotation_between
 from supportless.search.settings import SearchSettings
 

@@ -266,7 +266,7 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
 def test_planar_rig_turns_about_the_plane_normal(rig_cache_dir, tmp_path):
     from supportless.base.kinematics import planar_rotation
     from supportless.energies.surface import boundary_edges
-    from supportless.rig.rig import load_rig
+    from supportless.rig.load import load_rig
 
     rig = load_rig("demo:woody2d", cache_dir=rig_cache_dir)
     state = EditorState(rig, workdir=tmp_path)

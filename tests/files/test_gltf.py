@@ -1,4 +1,4 @@
-"""Rigged glTF/GLB input (supportless.files.gltf, supportless.rig.rig.load_rig) on small synthetic files, one per mess.
+"""Rigged glTF/GLB input (supportless.files.gltf, supportless.rig.load.load_rig) on small synthetic files, one per mess.
 
 Every file is written here with pygltflib: a column of three stacked segments
 along +Y (20 x 60 x 20 mm once read, the file's metres becoming millimetres),
@@ -35,7 +35,7 @@ from supportless.files.gltf import posed_joint_transforms, read_gltf_skin, write
 from supportless.files.joints import skeleton_from_joints
 from supportless.files.meshes import check_closed_surface
 from supportless.files.printbody import WINDING_CELLS, print_body
-from supportless.rig.rig import load_rig
+from supportless.rig.load import load_rig
 from supportless.search.settings import SearchSettings, resolve_fixed_bones
 
 FLOAT, U8, U16, U32 = 5126, 5121, 5123, 5125

@@ -109,3 +109,47 @@ def test_joints_outside_move_in_along_their_bone_and_a_tip_with_nothing_inside_g
     assert np.linalg.norm(J2[:, [0, 2]], axis=1).max() < 5.0
     top = J2[np.argmax(J2[:, 1])]
     assert 38.0 < top[1] < 40.5 and abs(top[0]) < 1e-9  # moved down its bone, just inside the cap at 40
+
+
+def _plus_region(arm=20, width=4, cell=1.0):
+    """A flat plus sign (z = 0), arms ``arm`` long and ``width`` wide, as a triangulated grid."""
+    n = int(round((2 * arm + width) / cell))
+    xs = (np.arange(n + 1) * cell) - (arm + width / 2)
+    X, Y = np.meshgrid(xs, xs, indexing="ij")
+    V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    centres = (xs[:-1] + xs[1:]) / 2
+    keep = (np.abs(centres)[:, None] < width / 2) | (np.abs(centres)[None, :] < width / 2)
+    i, j = np.nonzero(keep)
+    a, b, c, d = idx[i, j], idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]
+    F = np.vstack([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    used = np.unique(F)
+    remap = np.full(len(V), -1)
+    remap[used] = np.arange(len(used))
+    return V[used], remap[F]
+
+
+def test_a_flat_plus_gets_a_planar_skeleton_with_a_branch_per_arm():
+    from supportless.base.geometry import points_in_triangles
+    from supportless.rig.autoskeleton import planar_skeleton
+
+    V, F = _plus_region()
+    J, B = planar_skeleton(V, F, UP)
+    assert J.shape[1] == 3 and np.all(J[:, 2] == 0)  # on the plane
+    tips, junctions = _tips_and_junctions(J, B)
+    assert len(tips) == 4 and len(junctions) >= 1
+    assert np.linalg.norm(J[junctions, :2], axis=1).min() < 4.0  # the branch point at the centre
+    assert sorted(np.sign(J[tips, :2][np.argmax(np.abs(J[tips, :2]), axis=1) == 0, 0])) == [-1, 1]
+    assert np.abs(J[tips, :2]).max(axis=1).min() > 12.0  # every tip well out along its arm
+    assert np.all(points_in_triangles(V[:, :2], F, J[:, :2]))  # inside the figure
+    assert set(B.ravel()) == set(range(len(J))) and len(B) == len(J) - 1  # one tree
+
+
+def test_a_planar_model_without_a_skeleton_becomes_a_2d_rig(tmp_path):
+    V, F = _plus_region(arm=10, width=4)
+    sl.write_mesh(tmp_path / "plus.obj", V, F)
+    rig = sl.load_rig(tmp_path / "plus.obj", cache=False, skeleton_out=tmp_path / "plus.tgf")
+    assert rig.vertices.shape[1] == 2 and rig.bone_count >= 4
+    assert any("built one from the shape" in w for w in rig.info["warnings"])
+    J, B = sl.read_tgf(tmp_path / "plus.tgf")
+    assert np.all(J[:, 2] == 0) and len(B) == rig.bone_count

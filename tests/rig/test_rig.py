@@ -179,7 +179,7 @@ def test_inward_surface_is_flipped(branch_files, branch_rig):
 
 def test_second_load_comes_from_the_cache(tmp_path, monkeypatch):
     first = sl.load_rig("demo:branch", up="y", cache_dir=tmp_path)
-    import supportless.rig.rig as rig_module
+    import supportless.rig.load as rig_module
 
     def no_preparation(*args, **kwargs):  # the second load must not prepare: it reads the entry
         raise AssertionError("the rig was prepared again")

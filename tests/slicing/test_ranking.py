@@ -160,6 +160,7 @@ def test_cli_default_slices_the_answers_with_the_slicer_it_finds(tmp_path, monke
 
 def test_cli_without_a_slicer_the_model_chooses_and_says_so(tmp_path, monkeypatch):
     monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(tmp_path / "missing"))
+    monkeypatch.setenv("SUPPORTLESS_CURA_ENGINE", str(tmp_path / "no-cura"))  # no slicer at all
     r, data = _run(tmp_path)
     assert data["choice"]["by"] == "model"
     assert "chosen by the slicer model (PrusaSlicer not found" in r.output
@@ -178,6 +179,7 @@ def test_cli_slice_rank_0_is_the_plain_search_result(tmp_path, monkeypatch, bran
 
 def test_cli_slice_rank_without_a_slicer_stops_before_the_search(tmp_path, monkeypatch):
     monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(tmp_path / "missing"))
+    monkeypatch.setenv("SUPPORTLESS_CURA_ENGINE", str(tmp_path / "no-cura"))  # no slicer at all
     r = CliRunner().invoke(main, ["optimize", "demo:branch", "--slice-rank", "2", "-o", str(tmp_path / "o.stl")])
     assert r.exit_code == 3
     assert "--slice-rank needs PrusaSlicer" in r.output and not (tmp_path / "o.stl").exists()

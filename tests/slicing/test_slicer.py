@@ -398,6 +398,7 @@ def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monke
 
     rest, posed = _demo_meshes(tmp_path)
     monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", str(tmp_path / "no-such-slicer"))
+    monkeypatch.setenv("SUPPORTLESS_CURA_ENGINE", str(tmp_path / "no-cura"))  # no slicer at all
     out = CliRunner().invoke(main, ["slice-check", str(rest), str(posed)])
     assert out.exit_code == 2
     assert "apt-get install prusa-slicer" in out.output

@@ -1,6 +1,6 @@
 """Measure the viewer's input-to-update latency on a model.
 
-    python -m supportless.apps.ui.bench MODEL [--skeleton S.tgf] [--up y] [--edits 40] [--browser /usr/bin/chromium]
+    python -m supportless.apps.ui.bench MODEL [--skeleton S.tgf] [--up auto] [--edits 40] [--browser /usr/bin/chromium]
 
 Server side: from an edit reaching the app (what a slider callback does) to
 (1) the new bone frames being flushed to the browser (``mesh``) and (2) the
@@ -61,13 +61,13 @@ def browser_latency(app, chromium: str, presses: int = 20) -> dict:
 
 
 def main(argv=None) -> None:
-    from ...rig.rig import load_rig
+    from ...rig.load import load_rig
     from .app import App
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("model")
     ap.add_argument("--skeleton")
-    ap.add_argument("--up", default="y")
+    ap.add_argument("--up", default="auto")
     ap.add_argument("--edits", type=int, default=40)
     ap.add_argument("--browser", help="path of a Chromium to also measure in the page")
     args = ap.parse_args(argv)
