@@ -64,6 +64,8 @@ def prepare(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache,
     click.echo(f"{rig.name}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
                f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones, {rig.dim}D")
     click.echo(f"{source} in {dt:.2f} s" + (f"  (cache: {rig.info['cache']})" if rig.info.get("cache") else ""))
+    if rig.info.get("up"):
+        click.echo(rig.info["up"])
 
 
 # --------------------------------------------------------------------------- #

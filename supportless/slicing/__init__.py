@@ -1,6 +1,8 @@
-"""A real slicer's word: PrusaSlicer run on the written files, and its choice among answers.
+"""A real slicer's word: PrusaSlicer or Cura run on the written files, and their choice among answers.
 
-* :mod:`.prusaslicer`: the PrusaSlicer bridge (slice, support filament, slice-check);
+* :mod:`.prusaslicer`: the PrusaSlicer bridge (slice, support filament, slice-check), which also
+  hands a Cura slice to :mod:`.cura` (CuraEngine headless: normal or tree supports);
+* :mod:`.choice`: which slicer and which support; :mod:`.jobs`: slicer runs in parallel, each with its logs;
 * :mod:`.gcode`: reading a G-code summary (filament per feature, print time);
-* :mod:`.ranking`: PrusaSlicer picks among the answers the search weighed.
+* :mod:`.ranking`: the slicer picks among the answers the search weighed.
 """

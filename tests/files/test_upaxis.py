@@ -94,3 +94,18 @@ def test_the_fertility_sculpture_stands_on_its_flat_base(shared_file):
     for name in ("bunny.obj", "libigl/elephant.obj", "unrigged/armadillo.obj"):
         V, F = sl.read_mesh(shared_file(name))
         assert np.array_equal(guess_up(V, F, name)[0], [0, 1, 0]), name
+
+
+def test_prepare_names_the_direction_it_chose(tmp_path):
+    from click.testing import CliRunner
+
+    from supportless.apps.cli import main
+
+    V, F, J, B = sl.demo_figure("branch")
+    R = rotation_to_z([0, 1, 0])
+    sl.write_mesh(tmp_path / "z.stl", V @ R.T, F), sl.write_tgf(tmp_path / "z.tgf", J @ R.T, B)
+    r = CliRunner().invoke(main, ["prepare", str(tmp_path / "z.stl"), "--cache-dir", str(tmp_path / "cache")])
+    assert r.exit_code == 0, r.output
+    assert "printing direction +Z (as STL files are written; --up chooses another)" in r.stdout
+    r = CliRunner().invoke(main, ["prepare", str(tmp_path / "z.stl"), "--up", "z", "--cache-dir", str(tmp_path / "cache")])
+    assert r.exit_code == 0 and "printing direction" not in r.output

@@ -153,3 +153,20 @@ def test_a_planar_model_without_a_skeleton_becomes_a_2d_rig(tmp_path):
     assert any("built one from the shape" in w for w in rig.info["warnings"])
     J, B = sl.read_tgf(tmp_path / "plus.tgf")
     assert np.all(J[:, 2] == 0) and len(B) == rig.bone_count
+
+
+def test_the_app_draws_a_skeleton_built_from_the_shape(tmp_path):
+    """A figure without a skeleton opens in the browser app with its built skeleton drawn, joint by joint."""
+    from supportless.apps.ui import App
+
+    V, F = _solid(((0, 4, 0), (0, 30, 0), 4.0), ((-14, 22, 0), (14, 22, 0), 3.0), edge=1.0)
+    sl.write_mesh(tmp_path / "cross.obj", V, F)
+    rig = sl.load_rig(tmp_path / "cross.obj", cache=False)
+    app = App(rig, verbose=False, workdir=tmp_path / "work")
+    try:
+        assert app.wait_idle(60)
+        joints = np.array([h.position for h in app.scene.h_joints])
+        assert len(joints) == len(rig.joints) and rig.bone_count >= 3
+        assert np.asarray(app.scene.h_bones.points).shape == (rig.bone_count, 2, 3)
+    finally:
+        app.stop()
