@@ -10,7 +10,7 @@ filament. A model or slicer that fails is a cell with its one-line reason.
 Prints Markdown; ``--out`` writes it as the "## Three kinds of support"
 section.
 
-    python benchmarks/slicers.py [--models bunny Fox ...] [--out benchmarks/RESULTS.md]
+    python benchmarks/slicers.py [--models bunny Fox ...] [--out benchmarks/RESULTS.md] [--threshold prusa|cura]
 """
 
 from __future__ import annotations
@@ -55,13 +55,13 @@ def load(name: str, cache: str) -> sl.Rig:
     return models.load(name)
 
 
-def run(name: str, cache: str) -> dict:
+def run(name: str, cache: str, settings=None) -> dict:
     """Search one model and slice its rest and found poses with each slicer."""
     row = {"model": name}
     try:
         rig = load(name, cache)
         t0 = time.perf_counter()
-        result = sl.optimize(rig)
+        result = sl.optimize(rig, settings)
         row["search_s"] = time.perf_counter() - t0
     except (SupportlessError, OSError) as exc:
         row["error"] = str(exc).splitlines()[0]
@@ -122,26 +122,37 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--models", nargs="+", default=None)
     p.add_argument("--out", default=None)
+    p.add_argument("--threshold", choices=["prusa", "cura"], default="prusa",
+                   help="Whose overhang threshold the search uses: PrusaSlicer's default (as the tool's default) or "
+                        "Cura's (as with --slicer cura).")
     args = p.parse_args(argv)
+    settings = None
+    if args.threshold == "cura":
+        from supportless.files.printer import cura_default_profile
+
+        settings = sl.SearchSettings(overhang_angle=cura_default_profile().overhang_angle)
     names = args.models or all_models()
     rows = []
     with tempfile.TemporaryDirectory() as cache:
         for name in names:
-            rows.append(run(name, cache))
+            rows.append(run(name, cache, settings))
             print(table(rows[-1:]).splitlines()[-1], file=sys.stderr, flush=True)
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
+    heading = HEADING + (", searched at Cura's threshold" if settings else "")
     text = "\n".join([
-        HEADING, "",
+        heading, "",
         f"Command: `python benchmarks/slicers.py {' '.join(shlex.quote(a) for a in argv)}` at {commit} "
-        f"({platform.machine()}, 2 cores). The default search; the rest pose and the found pose as printed, 60 mm "
+        f"({platform.machine()}, 2 cores). The default search"
+        + (" with Cura's overhang threshold (40° from the plate, as `--slicer cura` searches)" if settings else "")
+        + "; the rest pose and the found pose as printed, 60 mm "
         "tall. PrusaSlicer 2.5: its default profile, grid supports. Cura: CuraEngine 4.13 with fdmprinter's "
         "defaults (0.1 mm layers, supports from 50° off the vertical), normal or tree supports. Support = filament "
         "with supports minus without, mm of 1.75 mm filament.", "",
         table(rows), "", summary(rows), ""])
     print(text)
     if args.out:
-        write_section(Path(args.out), HEADING, text)
+        write_section(Path(args.out), heading, text)
 
 
 if __name__ == "__main__":
