@@ -112,3 +112,37 @@ def read_entry(file: Path, notes: list[str] | None = None) -> dict | None:
         return None
     info = {"warnings": warnings} | ({"gltf": source} if source is not None else {})
     return arrays | {"info": info, "labels": labels, "coarse_faces": coarse}
+
+
+def skeleton_cache_file(V, F, up, bones, cache_dir) -> Path:
+    """The cache file of a skeleton built from a shape: a hash of the surface, the printing direction and ``bones``.
+
+    The builder is randomised (PyGEL3D's multi-scale local separators seed themselves), so a model keeps the
+    skeleton it got first: the same input gives the same rig and the same answer on the next run.
+    """
+    h = hashlib.sha256(f"supportless-skeleton-v{CACHE_VERSION}".encode())
+    for a in (V, F, np.asarray(up, np.float64)):
+        a = np.ascontiguousarray(a)
+        h.update(str(a.dtype).encode() + str(a.shape).encode() + a.tobytes())
+    h.update(repr(bones).encode())
+    return (Path(cache_dir) if cache_dir is not None else default_cache_dir()) / f"skeleton-{h.hexdigest()[:24]}.npz"
+
+
+def read_skeleton(file: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(joints (j, d) float64, bones (m, 2) int64)`` cached in ``file``, or None (missing or unreadable)."""
+    try:
+        with np.load(file) as data:
+            return np.asarray(data["joints"], np.float64), np.asarray(data["bones"], np.int64)
+    except Exception:  # noqa: BLE001 - missing or damaged: the skeleton is built again
+        return None
+
+
+def write_skeleton(file: Path, joints: np.ndarray, bones: np.ndarray) -> None:
+    """Keep a built skeleton in ``file``, atomically; a cache that cannot be written is no error."""
+    try:
+        file.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(file) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, joints=joints, bones=bones)
+    except OSError:
+        pass

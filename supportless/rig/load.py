@@ -14,7 +14,16 @@ from ..base.geometry import parse_up
 from ..files.meshes import read_dmat, read_mesh, read_tet_mesh, read_tgf
 from ..files.solid import closed_solid
 from ..files.upaxis import guess_up
-from .cache import default_cache_dir, gltf_cache_file, read_entry, rig_cache_key, write_entry
+from .cache import (
+    default_cache_dir,
+    gltf_cache_file,
+    read_entry,
+    read_skeleton,
+    rig_cache_key,
+    skeleton_cache_file,
+    write_entry,
+    write_skeleton,
+)
 from .rig import SAMPLES_PER_BONE, Rig, prepare_rig
 from .weights import BBW_ITERATIONS
 
@@ -110,7 +119,14 @@ def load_rig(model, skeleton=None, up="auto", *, cache: bool = True, cache_dir=N
             if progress:
                 progress("building a skeleton from the shape")
             planar = V.shape[1] == 2 or np.all(V[:, 2] == 0)
-            J, B = (planar_skeleton if planar else auto_skeleton)(V, F, parse_up(up, 3), bones)
+            kept = skeleton_cache_file(V, F, parse_up(up, 3), bones, cache_dir)
+            found = read_skeleton(kept) if cache else None
+            if found is None:
+                J, B = (planar_skeleton if planar else auto_skeleton)(V, F, parse_up(up, 3), bones)
+                if cache:
+                    write_skeleton(kept, J, B)
+            else:
+                J, B = found
             skel_path = None
             notes.append(f"no skeleton given: built one from the shape, {len(B)} bones "
                          "(--skeleton-out FILE.tgf keeps it to edit and pass back with --skeleton)")

@@ -95,6 +95,10 @@ def test_a_model_without_a_skeleton_gets_one_and_the_written_tgf_gives_the_same_
     np.testing.assert_array_equal(again.bones, rig.bones)
     np.testing.assert_allclose(again.tet_weights, rig.tet_weights)  # the same rig: the same cache entry
     assert again.info.get("from_cache")
+    # the builder is randomised: loading the model again keeps the skeleton it got, and its rig
+    third = sl.load_rig(tmp_path / "figure.obj", up="y", cache_dir=tmp_path / "cache")
+    np.testing.assert_array_equal(third.joints, rig.joints)
+    assert third.info.get("from_cache")
 
 
 def test_joints_outside_move_in_along_their_bone_and_a_tip_with_nothing_inside_goes():
