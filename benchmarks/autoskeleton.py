@@ -84,7 +84,8 @@ def run(name: str, skeleton, pictures: Path, cache: str, up: str = "auto") -> di
     return {"model": label, "bones": rig.bone_count, "faces": len(rig.faces), "skeleton_s": skeleton_s,
             "prepare_s": prepare_s, "search_s": result.runtime_seconds,
             "before": before, "after": after, "planar": sliced is None, "up": rig.info.get("up"),
-            "slicer": {"reduction_percent": reduction},
+            "reduction": reduction,  # PrusaSlicer's, or the estimate's for a planar figure
+            "slicer": None if sliced is None else {"reduction_percent": reduction},  # the sheet's titles: slicer only
             "pairs": "2D" if rig.dim == 2 else intersecting_face_pairs(result.print_vertices, rig.faces),
             "stands": report["after"].get("stands"), "stood": report["before"].get("stands"),
             "chain": report["naturalness"]["largest_chain_turn_deg"],
@@ -118,7 +119,7 @@ def table(rows: list[dict]) -> str:
         if "error" in r:
             lines.append(f"| {r['model']} | failed: {r['error']} |" + " |" * 8)
             continue
-        red = r["slicer"]["reduction_percent"]
+        red = r["reduction"]
         built = "–" if r["skeleton_s"] is None else f"{r['skeleton_s']:.1f} s"
         lines.append(f"| {r['model']} | {r['bones']} | {r['faces']} | {built} | {r['prepare_s']:.1f} s | "
                      f"{r['search_s']:.1f} s | "
@@ -157,9 +158,9 @@ def main(argv=None):
             shutil.rmtree(pictures, ignore_errors=True)
     pairs = {}
     for r in rows:
-        if "error" not in r and r["slicer"]["reduction_percent"] is not None and not r.get("planar"):
+        if "error" not in r and r["reduction"] is not None and not r.get("planar"):
             base, kind = r["model"].rsplit(" (", 1)
-            pairs.setdefault(base, {})[kind.rstrip(")")] = r["slicer"]["reduction_percent"]
+            pairs.setdefault(base, {})[kind.rstrip(")")] = r["reduction"]
     both = [v for v in pairs.values() if "hand" in v and "auto" in v]
     only = [v["auto"] for k, v in pairs.items() if k.startswith("unrigged/") and "auto" in v]
     text = "\n".join([HEADING, "", "Command: `python benchmarks/autoskeleton.py " + " ".join(shlex.quote(a) for a in argv)
