@@ -358,7 +358,7 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         from the G-code's support features (:func:`~supportless.slicing.gcode.feature_filament`)
         instead of the difference with a slice without supports: half the
         PrusaSlicer runs. The two agree within the skirt's few mm (the bunny
-        at 60 mm: 3345 mm against 3360 mm). PrusaSlicer only.
+        at 60 mm: 3345 mm against 3360 mm); Cura's ``;TYPE:SUPPORT`` extrusions likewise.
     choice : supportless.slicing.choice.SlicerChoice, optional
         The slicer and support (default PrusaSlicer's grid): with Cura
         (:func:`~supportless.slicing.cura.slice_with_cura`) ``slicer`` is
@@ -389,7 +389,8 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         settings = profile.raw if profile is not None and profile.slicer == "cura" else None
         out, exe, cfg = slice_with_cura(placed, names, choice.support, timeout=timeout, keep_dir=keep_dir, engine=exe,
                                         workers=workers or max(1, min(2, os.cpu_count() or 1)),
-                                        definitions=choice.cura_definitions, settings=settings)
+                                        definitions=choice.cura_definitions, settings=settings,
+                                        by_feature=by_feature)
         return SupportSlices(meshes=out, slicer=exe, config=cfg)
     if profile is not None and profile.slicer != "prusa":
         raise InputError(profile.path, "a Cura profile goes with --slicer cura")

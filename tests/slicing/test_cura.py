@@ -181,3 +181,14 @@ def test_a_missing_engine_says_how_to_install_it(tmp_path, monkeypatch):
         slice_with_cura([_cube()], ["cube"])
     r = CliRunner().invoke(main, ["slice-check", "a.stl", "b.stl", "--slicer", "cura"])
     assert r.exit_code != 0
+
+
+def test_support_read_from_the_gcode_matches_the_difference_but_the_brim(cura_engine):
+    """One slice per answer when comparing them: the G-code's support extrusions against with-minus-without."""
+    exe, folder = cura_engine
+    both = slice_with_cura([_shelf()], ["shelf"], engine=exe, definitions=folder)[0][0]
+    once = slice_with_cura([_shelf()], ["shelf"], engine=exe, definitions=folder, by_feature=True)[0][0]
+    assert "nosupport" not in once and once["support_mm"] > 0
+    # the difference also counts what the supports add to the brim around them: most of this small shelf's
+    # (the 60 mm bunny: 1942 against 2162 mm)
+    assert 0.3 * both["support_mm"] < once["support_mm"] <= both["support_mm"] + 1.0
