@@ -192,3 +192,18 @@ def test_support_read_from_the_gcode_matches_the_difference_but_the_brim(cura_en
     # the difference also counts what the supports add to the brim around them: most of this small shelf's
     # (the 60 mm bunny: 1942 against 2162 mm)
     assert 0.3 * both["support_mm"] < once["support_mm"] <= both["support_mm"] + 1.0
+
+
+def test_optimize_with_cura_checks_and_chooses_with_cura(cura_engine, branch_files, tmp_path):
+    r = CliRunner().invoke(main, [str(a) for a in (
+        "optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6, "--iterations", 2,
+        "-q", "-o", tmp_path / "posed.stl", "--report", tmp_path / "report.json", "--slicer", "cura",
+        "--support", "tree", "--slice-check", "--slice-rank", 2)])
+    assert r.exit_code == 0, r.output
+    report = json.loads((tmp_path / "report.json").read_text())
+    sliced = report["slice_check"]
+    assert sliced["engine"] == "cura" and sliced["support"] == "tree" and sliced["sliced_file"].endswith("posed.stl")
+    assert report["support"]["source"] == "Cura, tree supports" and "(Cura, tree supports;" in report["support"]["line"]
+    assert report["printer_profile"]["slicer"] == "cura" and report["printer_profile"]["overhang_angle"] == 40.0
+    assert report["settings"]["overhang_angle"] == 40.0  # the search's threshold is Cura's
+    assert "Cura, tree supports" in r.output
