@@ -195,13 +195,6 @@ def read_cura_log(text: str) -> tuple[float, float | None]:
     return float(volumes[-1]), (float(times[-1]) if times else None)
 
 
-def build_volume(extents: np.ndarray) -> tuple[float, float, float]:
-    """A build volume holding meshes of ``extents`` (mm), at least a common 250 x 210 x 210 mm printer's."""
-    ext = np.asarray(extents, np.float64).reshape(3)
-    return (float(max(250.0, math.ceil(ext[0] + 20.0))), float(max(210.0, math.ceil(ext[1] + 20.0))),
-            float(max(210.0, math.ceil(ext[2] + 10.0))))
-
-
 def slice_with_cura(placed: Sequence[tuple[np.ndarray, np.ndarray]], names: Sequence[str], structure: str = "grid", *,
                     timeout: float = 300.0, workers: int = 2, keep_dir: str | os.PathLike | None = None,
                     engine: str | None = None, definitions: str | os.PathLike | None = None,
@@ -251,9 +244,8 @@ def slice_with_cura(placed: Sequence[tuple[np.ndarray, np.ndarray]], names: Sequ
         CuraEngine failed or timed out.
     """
     from ..base.scratch import scratch_dir
-    from ..files.meshes import write_mesh
     from .gcode import feature_filament
-    from .jobs import Job, run_jobs
+    from .jobs import build_volume, mesh_jobs, run_jobs
 
     exe = engine or find_cura_engine()
     folder = find_cura_definitions(definitions) if exe is not None else None
@@ -265,14 +257,8 @@ def slice_with_cura(placed: Sequence[tuple[np.ndarray, np.ndarray]], names: Sequ
     with scratch_dir("supportless-cura-") as tmp:
         work = Path(keep_dir if keep_dir is not None else tmp)
         work.mkdir(parents=True, exist_ok=True)
-        jobs = []
-        for label, (V, F) in zip(names, placed):
-            stl = work / f"{label}.stl"
-            write_mesh(stl, V, F)
-            for support in (True,) if by_feature else (True, False):
-                gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
-                cmd = cura_command(exe, folder, stl, gcode, support, structure, given, volume)
-                jobs.append(Job(f"{label} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
+        jobs = mesh_jobs(placed, names, work, lambda stl, gcode, support: cura_command(
+            exe, folder, stl, gcode, support, structure, given, volume), by_feature)
         run_jobs(jobs, workers, float(timeout), name="CuraEngine", last_line=_last_error_line)
         runs = []
         for j in jobs:

@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+import math
 import re
 import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..base.errors import SlicerError
 
-__all__ = ["Job", "run_jobs"]
+__all__ = ["Job", "build_volume", "mesh_jobs", "run_jobs"]
 
 
 def _last_line(stderr: str, stdout: str = "") -> str:
@@ -98,3 +101,27 @@ def run_jobs(jobs: list[Job], workers: int, timeout: float, name: str = "PrusaSl
                 j.proc.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 pass
+
+
+def build_volume(extents) -> tuple[float, float, float]:
+    """A build volume holding meshes of ``extents`` (3,) mm with room around, at least a common 250 x 210 x 210 mm
+    printer's (a Prusa MK3's)."""
+    ext = np.asarray(extents, np.float64).reshape(3)
+    return (float(max(250.0, math.ceil(ext[0] + 20.0))), float(max(210.0, math.ceil(ext[1] + 20.0))),
+            float(max(210.0, math.ceil(ext[2] + 10.0))))
+
+
+def mesh_jobs(placed, names, work: Path, command, by_feature: bool = False) -> list[Job]:
+    """Each placed mesh written as ``work/NAME.stl`` and its slices with supports (and, unless ``by_feature``,
+    without): ``command(stl, gcode, support) -> list[str]`` gives each run's command line."""
+    from ..files.meshes import write_mesh
+
+    jobs = []
+    for label, (V, F) in zip(names, placed):
+        stl = work / f"{label}.stl"
+        write_mesh(stl, V, F)
+        for support in (True,) if by_feature else (True, False):
+            gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
+            jobs.append(Job(f"{label} mesh ({'with' if support else 'without'} supports)",
+                            command(stl, gcode, support), gcode))
+    return jobs

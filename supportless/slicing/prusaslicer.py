@@ -32,7 +32,7 @@ import numpy as np
 
 from ..base.errors import InputError, SlicerError
 from ..base.scratch import scratch_dir
-from ..files.meshes import check_mesh_arrays, read_mesh, write_mesh
+from ..files.meshes import check_mesh_arrays, read_mesh
 from ..files.printer import DEFAULT_DENSITY, PrinterProfile
 from ..files.printframe import REFERENCE_HEIGHT_MM, place_vertices, rotation_to_z
 from ..report.report import reduction
@@ -46,7 +46,7 @@ from .gcode import (
     parse_print_time,
     read_gcode_tail,
 )
-from .jobs import Job, run_jobs
+from .jobs import build_volume, mesh_jobs, run_jobs
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
@@ -407,13 +407,12 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
     for label, mesh in zip(names, meshes):
         V, F = _load_mesh(mesh, label)
         placed.append((place_vertices(V, up, scale), F))
-    ext = np.max([np.ptp(V, axis=0) for V, _ in placed], axis=0)
-    # a bed big enough for every mesh, at least an MK3's 250 x 210 mm, each centred on it
-    bed_x, bed_y = float(max(250.0, math.ceil(ext[0] + 20.0))), float(max(210.0, math.ceil(ext[1] + 20.0)))
+    # a bed big enough for every mesh, each centred on it
+    bed_x, bed_y, bed_z = build_volume(np.max([np.ptp(V, axis=0) for V, _ in placed], axis=0))
     for V, _ in placed:
         V[:, :2] += (bed_x / 2.0, bed_y / 2.0)
     cfg.setdefault("bed-shape", f"0x0,{bed_x:g}x0,{bed_x:g}x{bed_y:g},0x{bed_y:g}")
-    cfg.setdefault("max-print-height", f"{max(210.0, math.ceil(ext[2] + 10.0)):g}")
+    cfg.setdefault("max-print-height", f"{bed_z:g}")
     workers = workers or max(1, min(4, os.cpu_count() or 1))
 
     with scratch_dir("supportless-slice-") as tmp:
@@ -422,15 +421,9 @@ def slice_support(meshes: Sequence[MeshLike], up: Sequence[float], scale: float,
         datadir.mkdir(parents=True, exist_ok=True)
         load = ["--load", str(profile.path)] if from_file else []
         base = ["--loglevel=1", f"--datadir={datadir}", "--dont-arrange", *load, *_config_args(cfg)]
-        jobs = []
-        for label, (V, F) in zip(names, placed):
-            stl = work / f"{label}.stl"
-            write_mesh(stl, V, F)
-            for support in (True,) if by_feature else (True, False):
-                gcode = work / f"{label}-{'support' if support else 'nosupport'}.gcode"
-                cmd = [exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
-                       "--output", str(gcode), str(stl)]
-                jobs.append(Job(f"{label} mesh ({'with' if support else 'without'} supports)", cmd, gcode))
+        jobs = mesh_jobs(placed, names, work, lambda stl, gcode, support: [
+            exe, "--export-gcode", *base, *(SUPPORT_OPTIONS if support else ("--no-support-material",)),
+            "--output", str(gcode), str(stl)], by_feature)
         run_jobs(jobs, workers, float(timeout), last_line=_last_error_line)
         runs = []
         for j in jobs:
