@@ -624,20 +624,26 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
               help="The only folder the page reads and writes files in.")
 def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, cache_dir, demo_figure, port, host,
          workdir, bones=None, skeleton_out=None):
-    """Pose MODEL in the browser: live supports, optimize, export.
+    """Pose MODEL in the browser: live supports, optimize, slice, download.
 
-    Only the address printed (with its token) opens the page.
+    Without MODEL the page starts empty: drop a glTF character, or a mesh
+    with its .tgf skeleton, onto it. Only the address printed (with its
+    token) opens the page.
     """
     from .ui.app import run_app
+    from .ui.opener import OpenOptions
 
+    if keep_units and height_mm is not None:
+        _fail("--keep-units and --height-mm do not go together; choose one")
+    options = OpenOptions(up=up, height_mm=height_mm, keep_units=keep_units, cache=not no_cache, cache_dir=cache_dir)
     if demo_figure:
         model = "demo:tpose"
-    if model is None:
-        _fail("give a MODEL (with --skeleton) or --demo")
-    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
-                       keep_units=keep_units, bones=bones, skeleton_out=skeleton_out)
-    _say_frame(rig, frame)
-    run_app(rig, host=host, port=port, block=True, frame=frame, workdir=workdir)
+    rig = frame = None
+    if model is not None:
+        rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
+                           keep_units=keep_units, bones=bones, skeleton_out=skeleton_out)
+        _say_frame(rig, frame)
+    run_app(rig, host=host, port=port, block=True, frame=frame, workdir=workdir, open_options=options)
 
 
 # --------------------------------------------------------------------------- #

@@ -13,7 +13,7 @@ import numpy as np
 
 from ._grid_common import ENTERING, LEAVING, RISKY, grid_layout
 
-__all__ = ["pose3_numpy", "pose2_numpy"]
+__all__ = ["columns3_numpy", "pose2_numpy", "pose3_numpy"]
 
 
 def _edges(ax, ay, bx, by):
@@ -74,9 +74,11 @@ def _sweep(pix, z, code, zplate):
     -------
     inter, sup : float
         Summed length inside >= 2 layers, summed support column length.
+    columns : tuple of (c,) int64, (c,) float64, (c,) float64
+        The support columns: pixel, bottom and top height of each.
     """
     if pix.size == 0:
-        return 0.0, 0.0
+        return 0.0, 0.0, (pix, z, z)
     order = np.lexsort((z, pix))  # stable: ties keep face order, like the kernels
     pix, z, code = pix[order], z[order], code[order]
     step = np.where(code != LEAVING, 1, -1)
@@ -92,7 +94,7 @@ def _sweep(pix, z, code, zplate):
     inter = float(np.sum(np.where(before >= 2, z - zprev, 0.0)))
     col = (code == RISKY) & (before <= 0) & (z > zprev)
     sup = float(np.sum(z[col] - zprev[col]))
-    return inter, sup
+    return inter, sup, (pix[col], zprev[col], z[col])
 
 
 def pose3_numpy(X, F, orient, R, tau, support=True):
@@ -112,11 +114,35 @@ def pose3_numpy(X, F, orient, R, tau, support=True):
     inter, sup : float
         As :func:`._grid_reference._pose3`.
     """
+    inter, sup, _, cell = columns3_numpy(X, F, orient, R, tau, support)
+    area = cell * cell
+    return inter * area, sup * area
+
+
+def columns3_numpy(X, F, orient, R, tau, support=True):
+    """The ray grid of one 3D pose and the support columns it finds.
+
+    Parameters
+    ----------
+    X, F, orient, R, tau, support
+        As :func:`pose3_numpy`.
+
+    Returns
+    -------
+    inter, sup : float
+        Summed lengths (not yet times the cell area).
+    columns : tuple of (c,) float64, (c,) float64, (c,) float64, (c,) float64
+        ``u``, ``w`` (the ray's centre in the frame's plane), ``bottom`` and
+        ``top`` (heights) of each support column.
+    cell : float
+        Side of a ray cell (0 when the footprint is empty).
+    """
     umin, wmin, zplate = X.min(axis=0)
     umax, wmax, _ = X.max(axis=0)
     cell, nx, ny, u0, w0 = grid_layout(umin, umax, wmin, wmax, R)
+    empty = np.zeros(0)
     if nx == 0 or F.shape[0] == 0:
-        return 0.0, 0.0
+        return 0.0, 0.0, (empty, empty, empty, empty), cell
     A, B, C = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
     e1 = B - A
     e2 = C - A
@@ -155,9 +181,8 @@ def pose3_numpy(X, F, orient, R, tau, support=True):
               & _inside(_edges(c[:, 0], c[:, 1], a[:, 0], a[:, 1]), px, py))
     f, px, py, i, j = f[inside], px[inside], py[inside], i[inside], j[inside]
     z = A[f, 2] + gx[f] * (px - A[f, 0]) + gy[f] * (py - A[f, 1])
-    inter, sup = _sweep(j * nx + i, z, code[f], zplate)
-    area = cell * cell
-    return inter * area, sup * area
+    inter, sup, (pix, bottom, top) = _sweep(j * nx + i, z, code[f], zplate)
+    return inter, sup, (u0 + (pix % nx + 0.5) * cell, w0 + (pix // nx + 0.5) * cell, bottom, top), cell
 
 
 def pose2_numpy(X, E, orient, R, tau):
@@ -199,5 +224,5 @@ def pose2_numpy(X, E, orient, R, tau):
     ok = (px >= lo[e]) & (px < hi[e])
     e, i, px = e[ok], i[ok], px[ok]
     z = a[e, 1] + slope[e] * (px - a[e, 0])
-    inter, sup = _sweep(i, z, code[e], zplate)
+    inter, sup, _ = _sweep(i, z, code[e], zplate)
     return inter * cell, sup * cell

@@ -20,10 +20,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..files.printer import SEARCH_OVERHANG_ANGLE
+from ._grid_numpy import columns3_numpy
 from .raygrid import DEFAULT_RESOLUTION, ray_grid
-from .surface import prepare
+from .surface import frame_matrix, orientation_sign, prepare, to_frame
 
-__all__ = ["support_volume", "DEFAULT_RESOLUTION"]
+__all__ = ["DEFAULT_RESOLUTION", "support_columns", "support_volume"]
 
 
 def support_volume(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, resolution=DEFAULT_RESOLUTION, backend="fast"):
@@ -59,3 +60,40 @@ def support_volume(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, re
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
     res = ray_grid(V, F, u, resolution, tau, backend=backend)[:, 1]
     return float(res[0]) if single else res
+
+
+def support_columns(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, resolution=DEFAULT_RESOLUTION):
+    """The support columns of one 3D pose, as boxes: what :func:`support_volume` sums.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int
+    up : str or (3,) array_like of float
+    overhang_angle : float
+        Degrees from the build plate, as :func:`support_volume`.
+    resolution : int
+        Ray cells along the longer side of the footprint.
+
+    Returns
+    -------
+    bottoms : (c, 3) float64
+        The centre of each column's foot, in the frame of ``vertices``.
+    heights : (c,) float64
+        Each column's length along ``up``.
+    cell : float
+        The side of each column's square section; ``(heights * cell**2).sum()``
+        equals ``support_volume(..., backend="numpy")``.
+    basis : (3, 3) float64
+        Rows: the section's two sides and ``up``, unit vectors.
+    """
+    V, F, u, single = prepare(vertices, faces, up)
+    if not single or V.shape[-1] != 3:
+        raise ValueError("support_columns takes one 3D pose, (n, 3) vertices")
+    tau = float(np.cos(np.deg2rad(float(overhang_angle))))
+    orient = float(orientation_sign(V, F, "numpy")[0])
+    X = to_frame(V, u)[0]
+    _, _, (cu, cw, bottom, top), cell = columns3_numpy(X, F, orient, int(resolution), tau)
+    basis = frame_matrix(u)
+    bottoms = np.stack([cu, cw, bottom], axis=1) @ basis
+    return bottoms, top - bottom, float(cell), basis

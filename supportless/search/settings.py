@@ -27,7 +27,7 @@ from .anatomy import joint_ranges
 from .objective import OVERHANG_MODELS, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
-           "angle_layout", "resolve_fixed_bones"]
+           "angle_layout", "bone_index", "resolve_fixed_bones"]
 
 
 class _Auto:
@@ -347,7 +347,7 @@ class SearchSettings:
         out = np.full(rig.bone_count, float(self.joint_limit))
         for item in self.limits:
             bone, _, value = item.partition("=")
-            out[_bone_index(bone, rig.bone_count, rig.labels)] = float(value)
+            out[bone_index(bone, rig.bone_count, rig.labels)] = float(value)
         return out
 
     def check_bones(self, bone_count: int, labels: list | None = None) -> None:
@@ -360,7 +360,7 @@ class SearchSettings:
         """
         for item in (*self.fix, *self.free, *(x.partition("=")[0] for x in self.limits)):
             if str(item).lower() != "all":
-                _bone_index(item, bone_count, labels)
+                bone_index(item, bone_count, labels)
 
     def fixed_bones(self, rig: Rig) -> np.ndarray:
         """Which bones keep their rotation, (m,) bool: :func:`resolve_fixed_bones`, and bones limited to 0 degrees."""
@@ -435,11 +435,11 @@ def resolve_fixed_bones(rig: Rig, fix: list | None = None, free: list | None = N
             if str(name).lower() == "all":
                 fixed[:] = value
                 continue
-            fixed[_bone_index(name, m, rig.labels)] = value
+            fixed[bone_index(name, m, rig.labels)] = value
     return fixed
 
 
-def _bone_index(name, m: int, labels: list | None = None) -> int:
+def bone_index(name, m: int, labels: list | None = None) -> int:
     """0-based index of a bone given as its 1-based number or (a glTF rig) its name; InputError otherwise."""
     if labels is not None and str(name) in labels:
         return labels.index(str(name))

@@ -30,14 +30,22 @@ from typing import Callable
 import numpy as np
 
 from ...base.errors import SupportlessError
+from ...energies.support import support_columns
 from ...search.orientation import rotation_axis_angle
-from ...search.settings import SearchSettings
+from ...search.settings import SearchSettings, bone_index
 from .front import FrontBrowser
-from .guard import Guard, is_loopback
+from .guard import Guard, is_loopback, limit_uploads
+from .opener import MAX_UPLOAD_BYTES, OpenOptions, Uploads, prepare_model
 from .panel import Panel, measures_markdown
 from .ports import page_url, start_server
-from .scene import Scene
+from .readout import broken_rules
+from .scene import Scene, draw_welcome
+from .slicerun import SliceRun, slice_markdown
 from .state import FRAMES, EditorState
+
+#: Ray cells along the footprint's longer side of the support preview (coarser than the measure's, to draw fast).
+PREVIEW_RESOLUTION = 64
+WELCOME = "Drop a model here: .glb/.gltf, or a mesh with its .tgf (or use Open model… in the panel)"
 
 __all__ = ["App", "run_app"]
 
@@ -82,35 +90,117 @@ class App:
         The last status or error message shown in the page.
     """
 
-    def __init__(self, rig, host: str = "127.0.0.1", port: int | None = None, *, verbose: bool = True,
-                 workdir=None, settings: SearchSettings | None = None, frame=None):
-        self.rig = rig
-        self.state = EditorState(rig, settings, workdir, frame)
+    def __init__(self, rig=None, host: str = "127.0.0.1", port: int | None = None, *, verbose: bool = True,
+                 workdir=None, settings: SearchSettings | None = None, frame=None,
+                 open_options: OpenOptions | None = None):
+        self.workdir, self.base_settings = workdir, settings
+        self.open_options = open_options or OpenOptions()
+        self.rig = self.state = self.scene = self.front = self.panel = None
         self.status = "ready"
         self.measures: dict = {}
         self.shown_vertices: np.ndarray | None = None
         self.latency_ms: dict = {}
         self._latencies: list[float] = []
         self._cond = threading.Condition()
+        self._swap = threading.RLock()  # held while a model is drawn or replaced
         self._requested = self._rendered = 0
         self._input_time = time.perf_counter()
         self._stopping = False
         self._dragging = False
-        self.view = {"frame": "standing", "show_risky": True, "weights": False}
+        self._opening: threading.Thread | None = None
+        self.uploads = Uploads()
+        self.slicing = SliceRun(self._slice_done)
+        self.slice_report: dict | None = None
 
         #: checks the token, Host and Origin of every request (:mod:`supportless.apps.ui.guard`)
         self.guard = Guard(host)
-        self.server = start_server(host, port, f"supportless: {rig.name}", verbose, self.guard)
+        self.server = start_server(host, port, "supportless", verbose, self.guard)
+        limit_uploads(self.server, MAX_UPLOAD_BYTES, lambda name, size: self._error(
+            f"{name}: {size / 2**20:.0f} MB is more than the {MAX_UPLOAD_BYTES // 2**20} MB a page may send; "
+            "open it with `supportless view FILE`"))
         self.port = int(self.server.get_port())
         self.url = page_url(host, self.port, self.guard.token)
-        self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo)
-        self.front = FrontBrowser(self.state)
-        self.panel = Panel(self.server.gui, self)
-        self.state.subscribe(self._on_state)
-        self._on_state("settings")
-        self._on_state("selection")
         self._worker = threading.Thread(target=self._render_loop, name="supportless-ui-render", daemon=True)
         self._worker.start()
+        if rig is None:
+            self.panel = Panel(self.server.gui, self)
+            draw_welcome(self.server, WELCOME)
+        else:
+            self.open_rig(rig, frame)
+
+    def open_rig(self, rig, frame=None) -> None:
+        """Show ``rig`` instead of the model on screen (its search and slicing stopped), printed by ``frame``.
+
+        Parameters
+        ----------
+        rig : supportless.rig.rig.Rig
+        frame : supportless.files.printframe.PrintFrame, optional
+            How it is printed (default: the rest pose 60 mm tall); the view is drawn in its millimetres.
+        """
+        with self._swap:
+            if self.state is not None:
+                self.state.cancel_optimize()
+                self.front.cancel()
+                self.slicing.cancel()
+                self.state.wait_optimize(30)
+                self.front.wait(30)
+            self.server.scene.reset()
+            self.server.gui.reset()
+            state = EditorState(rig, self.base_settings, self.workdir, frame)
+            self.rig, self.state, self.slice_report = rig, state, None
+            self.view = {"frame": "standing", "show_risky": True, "weights": False, "show_support": True,
+                         "before": False}
+            self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo,
+                               scale=state.print_frame.scale)
+            self.front = FrontBrowser(state)
+            self.panel = Panel(self.server.gui, self)
+            state.subscribe(lambda event, **info: self._on_state(event, **info) if state is self.state else None)
+            self._on_state("settings")
+            self._on_state("selection")
+
+    # ============================================================ opening
+    def receive_upload(self, name: str, content: bytes) -> bool:
+        """A file sent from the page: a skeleton is kept for its mesh; a model is prepared, then shown.
+
+        Returns
+        -------
+        accepted : bool
+            False (with one line in the page) for a bad file, or while another model is being prepared.
+        """
+        if self._opening is not None and self._opening.is_alive():
+            self._error(f"{name}: another model is being prepared; send it again when it is open")
+            return False
+        try:
+            model = self.uploads.receive(name, content)
+        except SupportlessError as exc:
+            self._error(str(exc))
+            return False
+        if model is None:
+            self._set_status(f"skeleton {name} received; now send its mesh")
+            return True
+        skeleton = self.uploads.skeleton_for(model)
+        self._opening = threading.Thread(target=self._prepare, args=(model, skeleton), name="supportless-ui-open",
+                                         daemon=True)
+        self._opening.start()
+        return True
+
+    def _prepare(self, model, skeleton) -> None:
+        with_what = f" with {skeleton.name}" if skeleton is not None else ""
+        self._set_status(f"opening {model.name}{with_what} ...")
+        try:
+            rig, frame = prepare_model(model, skeleton, self.open_options,
+                                       progress=lambda step: self._set_status(f"opening {model.name}: {step} ..."))
+            self.open_rig(rig, frame)
+        except (SupportlessError, OSError, ValueError) as exc:
+            self._error(f"cannot open {model.name}: {exc}")
+            return
+        except Exception as exc:  # noqa: BLE001 - the app keeps serving whatever the file does
+            logger.exception("opening %s failed", model.name)
+            self._error(f"cannot open {model.name}: {type(exc).__name__}: {exc}")
+            return
+        notes = [w for w in rig.info.get("warnings", []) if "skeleton" in w and "built" in w]
+        self._set_status(f"opened {rig.name}: {rig.bone_count} bones, {len(rig.faces)} triangles; "
+                         f"{frame.note()}" + (f"; {notes[0]}" if notes else ""))
 
     # ============================================================ actions
     def undo(self) -> bool:
@@ -222,13 +312,18 @@ class App:
             return False
 
     def set_view(self, show_risky: bool | None = None, weights: bool | None = None,
-                 opacity: float | None = None, frame: str | None = None) -> None:
-        """View options: risky-face overlay, colouring by bone weights, mesh opacity, frame.
+                 opacity: float | None = None, frame: str | None = None, show_support: bool | None = None,
+                 before: bool | None = None) -> None:
+        """View options: risky-face overlay, colouring by bone weights, mesh opacity, frame, support preview.
 
         Parameters
         ----------
         frame : {"standing", "print"}, optional
             Show the model standing or as printed (turned by the print rotation onto the plate).
+        show_support : bool, optional
+            Draw the predicted support columns (:func:`supportless.energies.support.support_columns`).
+        before : bool, optional
+            Show the rest pose, standing, instead of the current pose (the pose is kept).
 
         Raises
         ------
@@ -239,12 +334,94 @@ class App:
             if frame not in FRAMES:
                 raise ValueError(f"frame must be one of {FRAMES}, not {frame!r}")
             self.panel.show_view(frame)
-        for key, value in (("show_risky", show_risky), ("weights", weights), ("frame", frame)):
+        for key, value in (("show_risky", show_risky), ("weights", weights), ("frame", frame),
+                           ("show_support", show_support), ("before", before)):
             if value is not None:
                 self.view[key] = value
         if opacity is not None:
             self.scene.set_opacity(opacity)
         self._request_render()
+
+    def locked(self) -> np.ndarray:
+        """The bones the user locked: those named in the settings' ``fix``, (m,) bool."""
+        rig, out = self.rig, np.zeros(self.rig.bone_count, bool)
+        for name in self.state.settings.fix:
+            if str(name).lower() == "all":
+                out[:] = True
+            else:
+                out[bone_index(name, rig.bone_count, rig.labels)] = True
+        return out
+
+    def lock_bone(self, bone: int, locked: bool = True) -> bool:
+        """Lock bone ``bone`` (0-based): Optimize and the front keep it as it is; or unlock it.
+
+        A lock is a bone number in the search's ``fix`` setting (saved with the pose).
+        """
+        names = self.rig.bone_names()
+        number = str(bone + 1)
+        fix = [f for f in self.state.settings.fix if f not in (number, names[bone])]
+        if locked:
+            fix.append(number)
+        if not self.change_setting("fix", ",".join(fix)):
+            return False
+        word = "locked: Optimize keeps it as it is" if locked else "unlocked"
+        if not locked and self.state.fixed[bone]:
+            word += " (it rests on the plate, so the search still keeps it; free it with Free bones)"
+        self._set_status(f"bone {number} ({names[bone]}) {word}")
+        self._request_render()
+        return True
+
+    # ============================================================= slicing
+    def start_slice(self, slicer: tuple[str, str] = ("prusa", "grid")) -> bool:
+        """Slice the rest pose and the current pose (as printed) with a real slicer, in the background.
+
+        Parameters
+        ----------
+        slicer : tuple of str
+            ``(engine, support)``: ``("prusa", "grid")``, ``("cura", "grid")`` or ``("cura", "tree")``.
+
+        Returns
+        -------
+        started : bool
+            False (and one line in the page) when the slicer is missing or a slice already runs.
+        """
+        from ...slicing.choice import SlicerChoice
+        from ..cli_common import _slicer_missing
+
+        try:
+            choice = SlicerChoice(*slicer)
+        except SupportlessError as exc:
+            self._error(f"cannot slice: {exc}")
+            return False
+        missing = _slicer_missing(choice)
+        if missing:
+            self._error(f"cannot slice: {missing}")
+            return False
+        frame, state = self.state.print_frame, self.state
+        rest = (frame.place(self.rig.vertices), self.rig.faces)
+        posed = (frame.place(state.printed_on_plate()), self.rig.faces)
+        if not self.slicing.start(rest, posed, choice):
+            self._set_status("a slice is already running")
+            return False
+        self.panel.show_slicing(True, f"slicing with {choice.label}: the rest pose and this pose, with and without "
+                                      "support (four runs) ...")
+        self._set_status(f"slicing with {choice.label} ...")
+        return True
+
+    def cancel_slice(self) -> None:
+        """Stop the running slice (its slicer processes too)."""
+        if self.slicing.cancel():
+            self.panel.show_slicing(False, "slicing cancelled")
+            self._set_status("slicing cancelled")
+
+    def _slice_done(self, report: dict | None, error: str | None) -> None:
+        if error is not None:
+            self.panel.show_slicing(False, f"⚠ slicing failed: {error}")
+            self._error(f"slicing failed: {error}")
+            return
+        self.slice_report = report
+        self.panel.show_slicing(False, slice_markdown(report))
+        self._set_status("sliced: the slicer's figures are in the Slice folder")
 
     def on_slider(self, axis: int, degrees: float) -> None:
         """An X/Y/Z slider of the selected bone moved in the page."""
@@ -390,50 +567,70 @@ class App:
                 self._cond.notify_all()
 
     def _render(self, t_in: float) -> None:
-        state, view = self.state, dict(self.view)
+        with self._swap:
+            if self.state is not None:
+                self._draw(t_in)
+
+    def _draw(self, t_in: float) -> None:
+        state, view, rig = self.state, dict(self.view), self.rig
         (angles, R), selected, fixed, settings = state.get_pose(), state.selected, state.fixed, state.settings
+        if view["before"]:  # the rest pose, standing, for a look back
+            angles, R, view["frame"] = rig.rest_angles(), np.eye(rig.dim), "standing"
         printed = view["frame"] == "print"
-        V = self.rig.pose(angles) if printed else None  # the plate placement needs the exact surface
+        V = rig.pose(angles) if printed else None  # the plate placement needs the exact surface
         Q, shift = state.frame_transform(view["frame"], V, R)
-        self.scene.draw_pose(angles, selected, fixed, move_gizmo=not self._dragging, placement=(Q, shift))
+        locked = self.locked()
+        self.scene.draw_pose(angles, selected, fixed, move_gizmo=not self._dragging, placement=(Q, shift),
+                             locked=locked)
         t_mesh = time.perf_counter()
-        V = self.rig.pose(angles) if V is None else V
+        V = rig.pose(angles) if V is None else V
         m = state.measure(angles, rotation=R, exact=True, vertices=V)
         shown = V @ Q.T + shift
         weights = view["weights"]
         risky = m["risky"] if printed else m["risky_standing"]
         self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
                                  None if weights else m["intersecting_faces"], selected if weights else None)
+        if rig.dim == 3:
+            self.scene.draw_support(support_columns(shown, rig.faces, rig.up, settings.overhang_angle,
+                                                    PREVIEW_RESOLUTION) if view["show_support"] else None)
         t_done = time.perf_counter()
         self.measures, self.shown_vertices = m, shown
         mesh_ms, full_ms = 1e3 * (t_mesh - t_in), 1e3 * (t_done - t_in)
         self._latencies = (self._latencies + [mesh_ms])[-50:]
         self.latency_ms = {"mesh": mesh_ms, "full": full_ms, "median_mesh": float(np.median(self._latencies))}
-        self.panel.show_measures(measures_markdown(m, settings, self.latency_ms, self.rig.dim))
-        self.panel.show_bone(selected, fixed)
+        rules = broken_rules(state.objective, angles) if m["terms"]["violation"] > 0 else []
+        text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules)
+        self.panel.show_measures(("**Showing the rest pose (before)**\n\n" if view["before"] else "") + text)
+        self.panel.show_bone(selected, fixed, locked)
 
     # ============================================================= lifecycle
     def stop(self) -> None:
-        """Cancel any search, stop drawing and close the server."""
-        self.state.cancel_optimize()
-        self.front.cancel()
+        """Cancel any search and slice, stop drawing, close the server and remove the uploaded files."""
+        if self.state is not None:
+            self.state.cancel_optimize()
+            self.front.cancel()
+        self.slicing.cancel()
         with self._cond:
             self._stopping = True
             self._cond.notify_all()
-        self.state.wait_optimize(30)
-        self.front.wait(30)
+        if self.state is not None:
+            self.state.wait_optimize(30)
+            self.front.wait(30)
+        self.slicing.wait(30)
         self._worker.join(5)
         self.server.stop()
+        self.uploads.close()
 
 
-def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser: bool = False,
+def run_app(rig=None, host: str = "127.0.0.1", port: int | None = None, open_browser: bool = False,
             block: bool = True, verbose: bool = False, settings: SearchSettings | None = None, frame=None,
-            workdir=None) -> App:
-    """Serve the viewer of ``rig``.
+            workdir=None, open_options: OpenOptions | None = None) -> App:
+    """Serve the viewer of ``rig``, or an empty page that opens models sent to it.
 
     Parameters
     ----------
-    rig : supportless.rig.rig.Rig
+    rig : supportless.rig.rig.Rig or None
+        None: start on an empty scene (a model is opened from the page).
     host : str
         ``127.0.0.1`` (default) serves only this computer; ``0.0.0.0`` the network.
     port : int or None
@@ -452,13 +649,16 @@ def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser:
     workdir : str or os.PathLike, optional
         The only folder the page's files are read from and written to
         (default: the current folder).
+    open_options : OpenOptions, optional
+        How models sent from the page are read (the ``view`` command's ``--up``, ``--height-mm``...).
 
     Returns
     -------
     app : App
         ``app.url``, ``app.port``, ``app.stop()``.
     """
-    app = App(rig, host=host, port=port, verbose=verbose, settings=settings, frame=frame, workdir=workdir)
+    app = App(rig, host=host, port=port, verbose=verbose, settings=settings, frame=frame, workdir=workdir,
+              open_options=open_options)
     logger.info("supportless viewer at %s", app.url)
     if not is_loopback(host):
         print(f"supportless: warning: the app listens on {host}: anyone who can reach this machine on port "
@@ -470,7 +670,8 @@ def run_app(rig, host: str = "127.0.0.1", port: int | None = None, open_browser:
 
         webbrowser.open(app.url)
     if block:
-        print(f"supportless: viewing {rig.name} at {app.url} (Ctrl-C to stop)", flush=True)
+        what = rig.name if rig is not None else "an empty scene (drop a model on the page)"
+        print(f"supportless: viewing {what} at {app.url} (Ctrl-C to stop)", flush=True)
         try:
             while True:
                 time.sleep(0.5)

@@ -25,7 +25,7 @@ import secrets
 from http.cookies import SimpleCookie
 from urllib.parse import parse_qs, urlsplit
 
-__all__ = ["Guard", "accept_values_only", "guarded_serve", "is_loopback", "value_updates"]
+__all__ = ["Guard", "accept_values_only", "guarded_serve", "is_loopback", "limit_uploads", "value_updates"]
 
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
 
@@ -198,3 +198,35 @@ def accept_values_only(server) -> None:
 
     interface.unregister_handler(_messages.GuiUpdateMessage, original)
     interface.register_handler(_messages.GuiUpdateMessage, values_only)
+
+
+def limit_uploads(server, max_bytes: int, on_refused) -> None:
+    """Refuse an upload larger than ``max_bytes`` before its first byte is kept.
+
+    viser keeps every part of an upload in memory until the last arrives; a
+    page could send any size. This puts a check before viser's handler of the
+    start of a transfer: a file said larger than ``max_bytes`` is not
+    registered (its parts are then dropped on arrival) and
+    ``on_refused(filename, size_bytes)`` says so.
+
+    Parameters
+    ----------
+    server : viser.ViserServer
+    max_bytes : int
+    on_refused : callable
+        ``on_refused(filename: str, size_bytes: int)``.
+    """
+    from viser import _messages
+
+    gui = server.gui
+    interface = gui._websock_interface
+    original = gui._handle_file_transfer_start
+
+    def limited(client_id, message) -> None:
+        if int(message.size_bytes) > max_bytes:
+            on_refused(str(message.filename), int(message.size_bytes))
+            return
+        original(client_id, message)
+
+    interface.unregister_handler(_messages.FileTransferStartUpload, original)
+    interface.register_handler(_messages.FileTransferStartUpload, limited)

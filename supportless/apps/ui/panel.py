@@ -10,11 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...search.objective import OVERHANG_MODELS
+from ...search.objective import INFEASIBLE, OVERHANG_MODELS
 from ...search.settings import ORIENT_MODES, RANGES, SearchSettings
+from .opener import MODEL_SUFFIXES, SKELETON_SUFFIXES
+from .readout import volume_text
 from .scene import MESH_OPACITY
 
-__all__ = ["NUMBER_SETTINGS", "Panel", "VIEWS", "measures_markdown", "turn_text"]
+__all__ = ["NUMBER_SETTINGS", "Panel", "SLICERS", "VIEWS", "drop_zone_html", "measures_markdown", "turn_text"]
+
+#: The slicers the Slice folder offers: label -> (engine, support), as ``--slicer`` and ``--support``.
+SLICERS = {"PrusaSlicer": ("prusa", "grid"), "Cura": ("cura", "grid"), "Cura, tree supports": ("cura", "tree")}
 
 #: The view choices of the panel: label -> frame (:data:`supportless.apps.ui.state.FRAMES`).
 VIEWS = {"standing": "standing", "as printed": "print"}
@@ -60,7 +65,8 @@ def turn_text(m: dict) -> str:
             f"printed upward")
 
 
-def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int) -> str:
+def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int, scale: float = 1.0,
+                      rules: list[str] | None = None) -> str:
     """The energies list of the panel.
 
     Parameters
@@ -73,6 +79,10 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         ``mesh`` and ``full`` update times, ms.
     dim : int
         2 for a planar rig.
+    scale : float
+        Millimetres per model unit (the print frame's): support volumes are shown printed, mm³ and grams.
+    rules : list of str, optional
+        The hard rules the pose breaks (:func:`supportless.apps.ui.readout.broken_rules`), said under the objective.
     """
     t = m["terms"]
     inter = m.get("intersecting_faces")
@@ -81,23 +91,53 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
     red = m.get("reduction", {})
     turned = abs(m["turn_deg"]) >= 0.05
     up = m["upright"]
-    standing = ([f"- Standing (not turned): support (prism) {_fmt(up['support_prism'])} · (column) "
-                 f"{_fmt(up['support_column'])} · {int(np.sum(m['risky_standing']))} risky faces"]
-                if turned else [])
+    vol = (lambda v: volume_text(v, scale)) if dim == 3 else _fmt
+    standing = ([f"- Standing (not turned): support (columns) {vol(up['support_column'])} · "
+                 f"{int(np.sum(m['risky_standing']))} risky faces"] if turned else [])
+    broken = [f"- ⚠ Breaks a rule (the objective adds {INFEASIBLE:g} while it does): {rule}" for rule in rules or ()]
     return "\n".join([
-        f"- Objective: **{_fmt(m['objective'])}** (what Optimize minimises)",
+        f"- Support (columns, as printed): **{vol(m['support_column'])}** ({_vs_rest(red.get('support_column'))})",
+        f"- Support (prism estimate): {vol(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
         f"- Printed: {turn_text(m)}" + ("; support counted as printed" if turned else ""),
-        f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g})",
-        f"- Overhang term: {_fmt(t['overhang'])} (× {settings.w_overhang:g}, faces past "
-        f"{settings.search_overhang_angle:.3g}°)",
-        f"- Intersection term: {_fmt(t['intersection'])} (× {settings.w_intersect:g})",
-        f"- Support (prism): {_fmt(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
-        f"- Support (column): {_fmt(m['support_column'])} ({_vs_rest(red.get('support_column'))})",
-        f"- Risky faces (past {m['overhang_angle']:g}°): {int(np.sum(m['risky']))} · "
+        f"- Risky faces (past {m['overhang_angle']:.3g}°): {int(np.sum(m['risky']))} · "
         f"self-intersecting: {inter_txt}",
         *standing,
+        f"- Objective: **{_fmt(m['objective'])}** (what Optimize minimises)",
+        *broken,
+        f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g}) · overhang term: {_fmt(t['overhang'])} "
+        f"(× {settings.w_overhang:g}, faces past {settings.search_overhang_angle:.3g}°) · intersection term: "
+        f"{_fmt(t['intersection'])} (× {settings.w_intersect:g})",
         f"- Update time: mesh {latency.get('mesh', 0):.1f} ms · with energies {latency.get('full', 0):.1f} ms",
     ])
+
+
+#: The page's side of a drop: each file dropped anywhere on the page goes through the Open model button's own
+#: file input, one after another (a skeleton first, so the mesh after it opens with it). viser offers no drop
+#: target and renders its HTML widget's markup as it is, so a broken image's error handler installs it, once.
+_DROP_SCRIPT = """(function(){const id='%(uuid)s';const w=window;if(w.__slDrop){w.__slDrop.id=id;return;}
+const st=w.__slDrop={id:id};const wait=t=>new Promise(r=>setTimeout(r,t));
+document.addEventListener('dragover',e=>{if(e.dataTransfer&&[...e.dataTransfer.types].includes('Files')){
+e.preventDefault();document.body.classList.add('sl-drag');}});
+document.addEventListener('dragleave',()=>document.body.classList.remove('sl-drag'));
+document.addEventListener('drop',async e=>{document.body.classList.remove('sl-drag');
+if(!e.dataTransfer||!e.dataTransfer.files.length)return;e.preventDefault();
+const tgf=f=>f.name.toLowerCase().endsWith('.tgf');
+const files=[...e.dataTransfer.files].sort((a,b)=>tgf(b)-tgf(a));
+for(const f of files){const input=document.getElementById('file_upload_'+st.id);
+const button=document.getElementById(st.id);if(!input)return;
+const dt=new DataTransfer();dt.items.add(f);input.files=dt.files;
+input.dispatchEvent(new Event('change',{bubbles:true}));await wait(300);
+for(let i=0;i<6000&&button&&button.disabled;i++)await wait(100);await wait(300);}});})();"""
+
+
+def drop_zone_html(uuid: str, kinds: str) -> str:
+    """The drop zone of the Open model folder, whose script sends dropped files through upload button ``uuid``."""
+    script = (_DROP_SCRIPT % {"uuid": uuid}).replace("\n", "").replace('"', "&quot;")
+    return (f'<div id="supportless-dropzone" style="border:2px dashed #5a6b85;border-radius:6px;padding:10px;'
+            f'margin:4px 8px;color:#1d2a3a;font-size:0.9em;text-align:center">'
+            f'Drop a model anywhere on this page: {kinds}; a mesh with its .tgf skeleton (both at once)'
+            f'<img alt="" src="data:image/gif;base64,AA" style="display:none" onerror="{script}"></div>'
+            '<style>body.sl-drag #supportless-dropzone{background:#dce8f7;border-color:#1f5fbf}</style>')
 
 
 class Panel:
@@ -126,17 +166,33 @@ class Panel:
         self.gui = gui
         self.app = app
         self.rig = app.rig
-        self.names = self.rig.bone_names()
         gui.configure_theme(control_width="large", dark_mode=False)
         self.status = gui.add_markdown("**Status:** ready")
+        self._add_open_folder()
+        if self.rig is None:  # nothing open yet: the page invites a model
+            return
+        self.names = self.rig.bone_names()
         with gui.add_folder("Energies"):
             self.measures = gui.add_markdown("computing…")
         self._add_pose_folder()
         self._add_search_folder(app.state.settings)
+        self._add_slice_folder()
         self._add_front_folder()
         self._add_files_folder()
 
     # ----------------------------------------------------------------- build
+    def _add_open_folder(self) -> None:
+        g, app = self.gui, self.app
+        kinds = ", ".join(MODEL_SUFFIXES)
+        with g.add_folder("Open model", expand_by_default=self.rig is None):
+            self.upload_model = g.add_upload_button(
+                "Open model…", icon=None, mime_type=",".join(MODEL_SUFFIXES + SKELETON_SUFFIXES),
+                hint="A rigged glTF (.glb, or .gltf with its buffers inside), or a mesh: send its .tgf skeleton "
+                     "first (or drop both at once); a mesh alone gets a skeleton built from its shape")
+            g.add_html(drop_zone_html(self.upload_model._impl.uuid, kinds))
+        self.upload_model.on_upload(lambda _e: app.receive_upload(self.upload_model.value.name,
+                                                                  self.upload_model.value.content))
+
     def _add_pose_folder(self) -> None:
         g, app = self.gui, self.app
         with g.add_folder("Pose"):
@@ -154,6 +210,14 @@ class Panel:
             g.add_button("Reset to rest pose").on_click(lambda _e: app.reset())
             g.add_button("Print as it stands", hint="Drop the print rotation (keep the pose)").on_click(
                 lambda _e: app.print_upright())
+            self.lock = g.add_checkbox("Lock this bone", False,
+                                       hint="Optimize and the front keep a locked bone as it is (drawn dark red); "
+                                            "saved with the pose")
+            before = g.add_checkbox("Show the rest pose (before)", False,
+                                    hint="Flip between the rest pose and the current one; nothing is changed")
+            show_support = g.add_checkbox("Show predicted support", True,
+                                          hint="Translucent orange columns: the support the estimate predicts under "
+                                               "the pose as shown")
             self.view = g.add_dropdown("View", tuple(VIEWS), initial_value="standing",
                                        hint="standing: as the model stands (the bones are edited here); "
                                             "as printed: turned by the print rotation onto the plate")
@@ -173,6 +237,13 @@ class Panel:
             if event.client is not None:
                 app.set_view(frame=VIEWS[self.view.value])
 
+        @self.lock.on_update
+        def _(event):
+            if event.client is not None:
+                app.lock_bone(app.state.selected, bool(self.lock.value))
+
+        before.on_update(lambda _e: app.set_view(before=bool(before.value)))
+        show_support.on_update(lambda _e: app.set_view(show_support=bool(show_support.value)))
         show_risky.on_update(lambda _e: app.set_view(show_risky=bool(show_risky.value)))
         weights.on_update(lambda _e: app.set_view(weights=bool(weights.value)))
         opacity.on_update(lambda _e: app.set_view(opacity=float(opacity.value)))
@@ -209,6 +280,26 @@ class Panel:
         self.optimize.on_click(lambda _e: app.start_optimize())
         self.cancel.on_click(lambda _e: app.state.cancel_optimize())
 
+    def _add_slice_folder(self) -> None:
+        g, app = self.gui, self.app
+        with g.add_folder("Slice", expand_by_default=False):
+            self.slicer = g.add_dropdown("Slicer", tuple(SLICERS), initial_value=next(iter(SLICERS)),
+                                         hint="The slicer run on the rest pose and the current pose, as printed")
+            self.slice = g.add_button("Slice rest pose and this pose", color="blue",
+                                      hint="Runs the slicer four times in the background (with and without support)")
+            self.cancel_slice = g.add_button("Cancel slicing", disabled=True)
+            self.slice_info = g.add_markdown("Not sliced yet: the figures of a real slicer (support filament, grams, "
+                                             "added print time) appear here.")
+        self.slice.on_click(lambda _e: app.start_slice(SLICERS[self.slicer.value]))
+        self.cancel_slice.on_click(lambda _e: app.cancel_slice())
+
+    def show_slicing(self, running: bool, text: str | None = None) -> None:
+        """Slice / Cancel enabled as a slice runs or not, and the figures (markdown) when given."""
+        self.slice.disabled = running
+        self.cancel_slice.disabled = not running
+        if text is not None:
+            self.slice_info.content = text
+
     def _add_front_folder(self) -> None:
         g, app = self.gui, self.app
         with g.add_folder("Front", expand_by_default=False):
@@ -243,14 +334,15 @@ class Panel:
         g, app, name = self.gui, self.app, self.rig.name
         state = app.state
         with g.add_folder("Files", expand_by_default=False):
-            pose_path = g.add_text("Pose file", f"{name}-pose.json", hint=f"On the server; relative to {state.workdir}")
-            save, load = g.add_button("Save pose"), g.add_button("Load pose")
-            upload = g.add_upload_button("Upload pose…", mime_type="application/json")
-            dl_pose = g.add_button("Download pose JSON")
-            mesh_path = g.add_text("Mesh file", f"{name}-posed.stl",
-                                   hint="On the server; .stl .3mf .obj .ply; written as printed, on the plate")
-            export = g.add_button("Export mesh to file")
             dl_stl, dl_3mf = g.add_button("Download STL"), g.add_button("Download 3MF")
+            dl_pose = g.add_button("Download pose JSON", hint="The pose, its print rotation and the locked bones")
+            upload = g.add_upload_button("Upload pose…", mime_type="application/json")
+            g.add_markdown(f"On the server, in {state.workdir.resolve()} only:")
+            pose_path = g.add_text("Pose file", f"{name}-pose.json", hint=f"Relative to {state.workdir.resolve()}")
+            save, load = g.add_button("Save pose on the server"), g.add_button("Load pose from the server")
+            mesh_path = g.add_text("Mesh file", f"{name}-posed.stl",
+                                   hint="Relative to the folder above; .stl .3mf .obj .ply; as printed, on the plate")
+            export = g.add_button("Export mesh on the server")
         save.on_click(lambda _e: app.save_pose(pose_path.value))
         load.on_click(lambda _e: app.load_pose(pose_path.value))
         export.on_click(lambda _e: app.export_mesh(mesh_path.value))
@@ -292,14 +384,18 @@ class Panel:
             if abs(sl.value - v) > 1e-9:
                 sl.value = v
 
-    def show_bone(self, bone: int, fixed: np.ndarray) -> None:
-        """Describe the selected bone (0-based); ``fixed`` (m,) bool: bones the search keeps."""
+    def show_bone(self, bone: int, fixed: np.ndarray, locked: np.ndarray | None = None) -> None:
+        """Describe the selected bone (0-based); ``fixed`` (m,) bool: bones the search keeps; ``locked`` (m,)
+        bool: those the user locked (the checkbox follows)."""
         rig = self.rig
         kids = int(np.sum(rig.parents == bone))
         parent = "none" if rig.parents[bone] < 0 else rig.parents[bone] + 1
+        is_locked = locked is not None and bool(locked[bone])
+        how = "locked: kept as it is" if is_locked else "fixed" if fixed[bone] else "free"
         self.bone_info.content = (f"Bone {bone + 1}: joints {rig.bones[bone, 0] + 1}→{rig.bones[bone, 1] + 1}, "
-                                  f"parent {parent}, {kids} child bone(s); "
-                                  f"{'fixed' if fixed[bone] else 'free'} in the search.")
+                                  f"parent {parent}, {kids} child bone(s); {how} in the search.")
+        if self.lock.value != is_locked:
+            self.lock.value = is_locked
 
     def show_settings(self, settings: SearchSettings, fixed: np.ndarray) -> None:
         """Show the search settings in force: the widgets, the fixed bones, the search's threshold.

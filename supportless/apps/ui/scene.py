@@ -20,17 +20,23 @@ import numpy as np
 
 from ...energies.surface import boundary_edges
 
-__all__ = ["Scene", "matrix_from_quat", "placement3", "quat_from_matrix", "to3", "transforms3"]
+__all__ = ["Scene", "column_boxes", "draw_welcome", "matrix_from_quat", "placement3", "quat_from_matrix", "to3",
+           "transforms3"]
 
 # colours (RGB 0-255)
-MESH_COLOR = (170, 190, 215)
+# colours (RGB 0-255): a mid-dark body on the light ground, warm overhangs on it, the skeleton darker still
+MESH_COLOR = (45, 85, 135)
 RISKY_COLORS = ((250, 205, 60), (245, 130, 40), (215, 35, 35))  # little / more / most support
 INTERSECT_COLOR = (200, 40, 220)
-BONE_FREE_COLOR = (40, 110, 230)
+SUPPORT_COLOR = (255, 160, 60)
+SUPPORT_OPACITY = 0.45
+BONE_FREE_COLOR = (20, 40, 90)
 BONE_FIXED_COLOR = (120, 120, 120)
+BONE_LOCKED_COLOR = (150, 20, 20)
 BONE_SELECTED_COLOR = (255, 140, 0)
-JOINT_COLOR = (30, 60, 160)
-MESH_OPACITY = 0.55
+JOINT_COLOR = (20, 30, 70)
+PLATE_COLOR = (200, 204, 212)
+MESH_OPACITY = 0.85
 
 
 # --------------------------------------------------------------------------- #
@@ -151,6 +157,48 @@ def support_levels(V3: np.ndarray, F: np.ndarray, up: np.ndarray, risky: np.ndar
     return np.digitize(need / top, [1 / 3, 2 / 3])
 
 
+def column_boxes(bottoms: np.ndarray, heights: np.ndarray, cell: float, basis: np.ndarray):
+    """Square columns as one triangle mesh (outward faces).
+
+    Parameters
+    ----------
+    bottoms : (c, 3) float64
+        The centre of each column's foot.
+    heights : (c,) float64
+    cell : float
+        The side of each column's square section.
+    basis : (3, 3) float64
+        Rows: the section's two sides and the columns' direction, orthonormal and right-handed.
+
+    Returns
+    -------
+    V : (8c, 3) float64
+    F : (12c, 3) int64
+    """
+    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0],
+                        [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], np.float64)
+    box = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                    [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]], np.int64)
+    c = len(heights)
+    local = np.broadcast_to(corners, (c, 8, 3)).copy()
+    local[..., :2] *= cell / 2
+    local[..., 2] *= np.asarray(heights, np.float64)[:, None]
+    V = (np.asarray(bottoms, np.float64)[:, None, :] + local @ basis).reshape(-1, 3)
+    F = (box[None] + 8 * np.arange(c)[:, None, None]).reshape(-1, 3)
+    return V, F
+
+
+def draw_welcome(server, text: str) -> None:
+    """The empty scene before a model is open: a plate, and what to do in words."""
+    s = server.scene
+    s.set_up_direction("+z")
+    s.add_grid("/plate", width=200.0, height=200.0, plane="xy", cell_size=10.0, section_size=50.0,
+               cell_color=(190, 195, 205), section_color=(120, 125, 140), plane_color=PLATE_COLOR, plane_opacity=0.8)
+    s.add_label("/welcome", text, position=(0.0, 0.0, 20.0))
+    cam = server.initial_camera
+    cam.look_at, cam.position, cam.up = (0.0, 0.0, 10.0), (0.0, -220.0, 140.0), (0.0, 0.0, 1.0)
+
+
 # --------------------------------------------------------------------------- #
 # the scene
 # --------------------------------------------------------------------------- #
@@ -168,17 +216,27 @@ class Scene:
         ``phase`` is ``"start"``, ``"update"`` or ``"end"``, ``rotation``
         (3, 3) float64 its orientation in the world of the standing model
         (the placement the pose is drawn with taken back).
+    scale : float
+        Scene units per model unit: the print frame's millimetres per unit, so
+        every model is drawn at its printed size whatever its file's units
+        (a 79 m glTF fox printed 60 mm tall is 60 units tall in the view).
+
+    Attributes
+    ----------
+    size : float
+        The rest pose's bounding-box diagonal, scene units.
     """
 
     def __init__(self, server, rig, on_joint_click: Callable[[int], None],
-                 on_gizmo: Callable[[str, np.ndarray], None]):
+                 on_gizmo: Callable[[str, np.ndarray], None], scale: float = 1.0):
         self.server = server
         self.rig = rig
+        self.scale = float(scale)
         self.up = to3(rig.up)
         self.faces = np.asarray(rig.faces, np.int64)
         self.edges = np.asarray(boundary_edges(self.faces), np.int64) if rig.dim == 2 else None
-        rest = to3(rig.vertices)
-        self.roots = to3(rig.joints[rig.pivots])  # the joint each bone turns about
+        rest = self.scale * to3(rig.vertices)
+        self.roots = self.scale * to3(rig.joints[rig.pivots])  # the joint each bone turns about
         self.size = float(np.linalg.norm(np.ptp(rest, axis=0)))
         centre = rest.mean(axis=0)
         self._centre_plate = centre - (centre @ self.up) * self.up
@@ -195,7 +253,7 @@ class Scene:
             skin_weights=np.asarray(rig.weights, np.float64), color=MESH_COLOR, opacity=MESH_OPACITY,
             side="double" if rig.dim == 2 else "front", flat_shading=False)
         self._add_skeleton(s, on_joint_click, on_gizmo)
-        self._place_camera(centre)
+        self._place_camera(centre, rest)
 
     # ----------------------------------------------------------------- build
     def _add_plate(self, s, lo: float) -> None:
@@ -210,7 +268,7 @@ class Scene:
                                  section_size=step * 5,
                                  wxyz=quat_from_matrix(_rotation_between(np.array([0, 0, 1.0]), up)),
                                  position=self._centre_plate + lo * up, cell_color=(190, 195, 205),
-                                 section_color=(120, 125, 140), plane_color=(235, 238, 242), plane_opacity=0.6,
+                                 section_color=(120, 125, 140), plane_color=PLATE_COLOR, plane_opacity=0.8,
                                  shadow_opacity=0.2)
         side = _perpendicular(up)
         back = -np.cross(up, side)
@@ -221,7 +279,7 @@ class Scene:
 
     def _add_skeleton(self, s, on_joint_click, on_gizmo) -> None:
         rig, size = self.rig, self.size
-        J = to3(rig.joints)
+        J = self.scale * to3(rig.joints)
         self.h_joints = []
         for j, p in enumerate(J):
             h = s.add_icosphere(f"/model/joints/{j}", radius=0.011 * size, color=JOINT_COLOR, position=p,
@@ -239,13 +297,27 @@ class Scene:
             phase = event.phase if event.phase in ("start", "end") else "update"
             on_gizmo(phase, self._turn.T @ matrix_from_quat(event.target.wxyz))
 
-    def _place_camera(self, centre: np.ndarray) -> None:
+    def _place_camera(self, centre: np.ndarray, rest: np.ndarray) -> None:
+        """Look at the model's broad side (across its longer horizontal extent), a little from above."""
         up = self.up
         side = _perpendicular(up)
+        front = np.cross(up, side)
+        if np.ptp(rest @ front) > np.ptp(rest @ side):  # longer along "front": look along "side" instead
+            side, front = front, -side
         cam = self.server.initial_camera
         cam.look_at = tuple(centre)
-        cam.position = tuple(centre + self.size * (0.85 * np.cross(up, side) + 0.35 * side + 0.4 * up))
+        cam.position = tuple(centre + self.size * (0.9 * front + 0.3 * side + 0.45 * up))
         cam.up = tuple(up)
+        cam.near = 1e-3 * self.size  # the clipping planes follow the model's size, whatever its units
+        cam.far = 100.0 * self.size
+        for client in self.server.get_clients().values():  # a page already open moves to the new model
+            try:
+                c = client.camera
+                c.near, c.far = cam.near, cam.far
+                c.up_direction = tuple(up)
+                c.position, c.look_at = cam.position, cam.look_at
+            except Exception:  # noqa: BLE001 - a page that is closing keeps its camera
+                pass
 
     # ------------------------------------------------------------------ draw
     def set_opacity(self, opacity: float) -> None:
@@ -253,7 +325,7 @@ class Scene:
         self.h_mesh.opacity = opacity if opacity < 0.999 else None
 
     def draw_pose(self, angles: np.ndarray, selected: int, fixed: np.ndarray, move_gizmo: bool = True,
-                  placement=None) -> None:
+                  placement=None, locked: np.ndarray | None = None) -> None:
         """Send the bone frames, joints and bones of a pose (sent at once, then flushed).
 
         Parameters
@@ -262,7 +334,9 @@ class Scene:
         selected : int
             The bone drawn in orange, where the gizmo sits.
         fixed : (m,) bool
-            Bones drawn grey (fixed in the search); the others blue.
+            Bones drawn grey (fixed in the search); the others dark blue.
+        locked : (m,) bool, optional
+            Bones the user locked, drawn dark red.
         move_gizmo : bool
             False while the gizmo is being dragged.
         placement : tuple of ((d, d) float64, (d,) float64), optional
@@ -270,14 +344,16 @@ class Scene:
             ``shift`` (``shown = V @ Q.T + shift``), e.g. as printed; None
             draws it standing.
         """
-        rig = self.rig
+        rig, k = self.rig, self.scale
         P, s = placement3(placement)
         Q, t = transforms3(rig.transforms(angles))
-        pos = (np.einsum("bij,bj->bi", Q, self.roots) + t) @ P.T + s
+        pos = (np.einsum("bij,bj->bi", Q, self.roots) + k * t) @ P.T + k * s
         Q = np.einsum("ij,bjk->bik", P, Q)
-        J = to3(rig.posed_joints(angles)) @ P.T + s
+        J = k * (to3(rig.posed_joints(angles)) @ P.T + s)
         self._turn = P
         colors = np.where(fixed[:, None], np.uint8(BONE_FIXED_COLOR), np.uint8(BONE_FREE_COLOR)).astype(np.uint8)
+        if locked is not None:
+            colors[locked] = BONE_LOCKED_COLOR
         colors[selected] = BONE_SELECTED_COLOR
         with self.server.atomic():
             for b, bone in enumerate(self.h_mesh.bones):
@@ -307,7 +383,7 @@ class Scene:
         weights_of : int, optional
             Colour the surface by this bone's skinning weights instead.
         """
-        V3 = to3(vertices)
+        V3 = self.scale * to3(vertices)
         lo = float((V3 @ self.up).min())
         self.h_grid.position = self._centre_plate + (lo - 1e-4 * self.size) * self.up
         self._draw_weights(V3, weights_of)
@@ -332,6 +408,23 @@ class Scene:
             for k in range(3):
                 self._overlay(f"risky{k}", lifted(risky & (level == k), 1.0), RISKY_COLORS[k])
             self._overlay("intersections", lifted(inter, 1.5), INTERSECT_COLOR, side="double")
+
+    def draw_support(self, columns) -> None:
+        """The predicted support as a translucent body: one box per column of the ray grid.
+
+        Parameters
+        ----------
+        columns : tuple or None
+            :func:`supportless.energies.support.support_columns` of the shown
+            surface (model units): ``(bottoms, heights, cell, basis)``; None hides it.
+        """
+        if columns is None or len(columns[1]) == 0:
+            self._overlay("support", np.zeros((0, 3)), SUPPORT_COLOR)
+            return
+        bottoms, heights, cell, basis = columns
+        V, F = column_boxes(self.scale * np.asarray(bottoms), self.scale * np.asarray(heights), self.scale * cell,
+                            basis)
+        self._overlay("support", V[F].reshape(-1, 3), SUPPORT_COLOR, opacity=SUPPORT_OPACITY)
 
     def _draw_weights(self, V3: np.ndarray, bone: int | None) -> None:
         """A copy of the posed surface coloured by one bone's weights, or the skinned mesh."""
@@ -364,7 +457,7 @@ class Scene:
         with self.server.atomic():
             h.points, h.colors, h.visible = pts, cols, True
 
-    def _overlay(self, key: str, tri: np.ndarray, color, side: str = "front") -> None:
+    def _overlay(self, key: str, tri: np.ndarray, color, side: str = "front", opacity: float | None = None) -> None:
         """Show triangles ``tri`` (3k, 3) as a single-colour overlay node, reusing the node."""
         h = self._overlays.get(key)
         if len(tri) == 0:
@@ -375,7 +468,7 @@ class Scene:
         F = np.arange(len(V), dtype=np.uint32).reshape(-1, 3)
         if h is None:
             self._overlays[key] = self.server.scene.add_mesh_simple(f"/model/{key}", V, F, color=color,
-                                                                    flat_shading=True, side=side)
+                                                                    flat_shading=True, side=side, opacity=opacity)
             return
         h.vertices = V  # fresh arrays: viser sends what changed
         if len(h.faces) != len(F):
