@@ -22,7 +22,7 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["STALE_SECONDS", "owner_tag", "remove_leftovers", "scratch_dir"]
+__all__ = ["STALE_SECONDS", "file_bytes", "owner_tag", "remove_leftovers", "scratch_dir"]
 
 #: A temporary name untouched this long is a leftover whoever made it.
 STALE_SECONDS = 3600.0
@@ -97,3 +97,11 @@ def scratch_dir(prefix: str, folder: str | os.PathLike | None = None):
         yield path
     finally:
         shutil.rmtree(path, ignore_errors=True)
+
+
+def file_bytes(name: str, write) -> bytes:
+    """The bytes ``write(path)`` puts in a temporary file called ``name`` (for a writer that only takes a path)."""
+    with scratch_dir("supportless-bytes-") as tmp:
+        path = Path(tmp) / name
+        write(path)
+        return path.read_bytes()

@@ -211,10 +211,12 @@ def test_print_view_shows_the_pose_turned_onto_the_plate(app, rig):
         printed = print_pose(V, R, rig.up)
         assert np.allclose(app.shown_vertices, printed, atol=1e-12)
         assert float((app.shown_vertices @ rig.up).min()) == pytest.approx(0.0, abs=1e-12)
-        # the skeleton and the gizmo are turned with the mesh
+        # the skeleton and the gizmo are turned with the mesh, drawn at the printed size (mm)
         shift = print_transform(V, R, rig.up)
         joints = np.array([h.position for h in app.scene.h_joints])
-        assert np.allclose(joints, rig.posed_joints(angles) @ R.T + shift, atol=1e-5)
+        k = app.state.print_frame.scale
+        assert app.scene.scale == k and k != 1.0
+        assert np.allclose(joints, k * (rig.posed_joints(angles) @ R.T + shift), atol=1e-5)
         bone_frame = rig.transforms(angles)[b][:, :3]
         assert abs(float(np.dot(app.scene.h_gizmo.wxyz, quat_from_matrix(R @ bone_frame)))) == pytest.approx(1.0)
         # the same pose standing again
@@ -360,9 +362,9 @@ def _playwright():
 
 
 def _number(text: str, label: str) -> float:
-    m = re.search(re.escape(label) + r":\s*\**([-+0-9.eE]+)", text)
+    m = re.search(re.escape(label) + r":\s*\**([-+0-9.,eE]+)", text)
     assert m, f"{label!r} not found in {text!r}"
-    return float(m.group(1))
+    return float(m.group(1).replace(",", ""))
 
 
 @pytest.mark.slow
@@ -383,7 +385,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             energies.wait_for(timeout=60000)
             rest_text = energies.inner_text()
             rest_objective = _number(rest_text, "Objective")
-            rest_column = _number(rest_text, "Support (column)")
+            rest_column = _number(rest_text, "Support (columns, as printed)")
 
             # pick the last bone in the dropdown, then turn it with the Z slider's keyboard arrows
             last = rig.bone_names()[-1]
@@ -408,7 +410,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             bad = tmp_path / "other-skeleton.json"
             bones = _other_bones(rig)
             posefile.write_pose(bad, np.zeros((len(bones), 3)), bones)
-            page.locator("input[type=file]").set_input_files(str(bad))
+            page.locator("input[type=file][accept='application/json']").set_input_files(str(bad))
             page.get_by_text(re.compile("Error:.*skeleton")).first.wait_for(timeout=30000)
             assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
             # the posed mesh as an STL download
@@ -424,8 +426,9 @@ def test_page_in_chromium(rig, tmp_path, chromium):
 
             # back to rest, then a small search from the panel
             page.get_by_role("button", name="Reset to rest pose").click()
-            page.wait_for_function("c => document.body.innerText.includes('Support (column): ' + c)",
-                                   arg=format(rest_column, ".4g"), timeout=30000)
+            page.wait_for_function("c => document.body.innerText.includes('Support (columns, as printed): ' + c)",
+                                   arg=rest_text.split("Support (columns, as printed): ")[1].split(" mm³")[0],
+                                   timeout=30000)
             for label, value in (("Particles", "20"), ("Iterations", "10")):
                 box = page.get_by_label(label)
                 box.fill(value)
@@ -439,7 +442,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             # the panel shows the measures of the pose the search left (rendered by the page, so polled)
             assert _until(lambda: "less than rest" in energies.inner_text())
             done_text = energies.inner_text()
-            assert _number(done_text, "Support (column)") < rest_column
+            assert _number(done_text, "Support (columns, as printed)") < rest_column
             assert "less than rest" in done_text
             # the answer chosen among the search's (turned or as it stands, by PrusaSlicer when found): said as it is
             turned = not np.allclose(app.state.last_result.rotation, np.eye(3))

@@ -4,6 +4,8 @@
   search settings, measures, background search), usable without a browser;
 * :mod:`supportless.apps.ui.scene`: the 3D view; :mod:`supportless.apps.ui.panel`: the
   side panel; :mod:`supportless.apps.ui.ports`: which port the server takes;
+* :mod:`supportless.apps.ui.opener`: models sent from the page; :mod:`supportless.apps.ui.slicerun`: the
+  Slice button's background run; :mod:`supportless.apps.ui.readout`: figures in words and human units;
 * :mod:`supportless.apps.ui.app`: :class:`App` wires them, :func:`run_app` serves the page.
 """
 

@@ -57,7 +57,8 @@ class App:
 
     Parameters
     ----------
-    rig : supportless.rig.rig.Rig
+    rig : supportless.rig.rig.Rig or None
+        None: an empty page that opens the models sent to it (:meth:`receive_upload`).
     host : str
         Interface to listen on (default: only this computer).
     port : int or None
@@ -69,6 +70,10 @@ class App:
         Folder of relative pose/mesh paths typed in the page (default: current folder).
     settings : SearchSettings, optional
         Search settings the panel starts with (default: the tool's defaults).
+    frame : supportless.files.printframe.PrintFrame, optional
+        How ``rig`` is printed; the view is drawn in its millimetres.
+    open_options : OpenOptions, optional
+        How models sent from the page are read (the ``view`` command's options).
 
     Attributes
     ----------
@@ -82,7 +87,12 @@ class App:
         The exactly posed surface last drawn, in the frame of the view
         (standing, or as printed: ``print_pose(rig.pose(angles), R, up)``).
     view : dict
-        ``frame`` (``"standing"`` or ``"print"``), ``show_risky``, ``weights``.
+        ``frame`` (``"standing"`` or ``"print"``), ``show_risky``, ``weights``, ``show_support`` (the
+        predicted support columns) and ``before`` (the rest pose shown instead of the pose).
+    slice_report : dict or None
+        The last Slice's figures (:func:`~supportless.apps.ui.slicerun.slice_markdown` shows them).
+    uploads : Uploads
+        Files sent from the page (a private folder, removed by :meth:`stop`).
     latency_ms : dict
         ``mesh`` (input to bone frames sent), ``full`` (to energies and
         overlays drawn) and ``median_mesh`` of the last 50 edits, ms.
@@ -108,6 +118,7 @@ class App:
         self._stopping = False
         self._dragging = False
         self._opening: threading.Thread | None = None
+        self._opened = 0  # models opened in this page
         self.uploads = Uploads()
         self.slicing = SliceRun(self._slice_done)
         self.slice_report: dict | None = None
@@ -144,16 +155,20 @@ class App:
                 self.slicing.cancel()
                 self.state.wait_optimize(30)
                 self.front.wait(30)
-            self.server.scene.reset()
-            self.server.gui.reset()
+            if self.scene is None:
+                self.server.scene.reset()  # the welcome
+            else:
+                self.scene.close()
+            self.panel.close()
+            self._opened += 1
             state = EditorState(rig, self.base_settings, self.workdir, frame)
             self.rig, self.state, self.slice_report = rig, state, None
             self.view = {"frame": "standing", "show_risky": True, "weights": False, "show_support": True,
                          "before": False}
             self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo,
-                               scale=state.print_frame.scale)
+                               scale=state.print_frame.scale, mesh_key=self._opened)
             self.front = FrontBrowser(state)
-            self.panel = Panel(self.server.gui, self)
+            self.panel = Panel(self.server.gui, self, previous=self.panel)
             state.subscribe(lambda event, **info: self._on_state(event, **info) if state is self.state else None)
             self._on_state("settings")
             self._on_state("selection")
@@ -191,8 +206,8 @@ class App:
             rig, frame = prepare_model(model, skeleton, self.open_options,
                                        progress=lambda step: self._set_status(f"opening {model.name}: {step} ..."))
             self.open_rig(rig, frame)
-        except (SupportlessError, OSError, ValueError) as exc:
-            self._error(f"cannot open {model.name}: {exc}")
+        except (SupportlessError, OSError, ValueError) as exc:  # said with the file's own name, not where it was kept
+            self._error(f"cannot open {model.name}: {str(exc).replace(str(model) + ': ', '')}")
             return
         except Exception as exc:  # noqa: BLE001 - the app keeps serving whatever the file does
             logger.exception("opening %s failed", model.name)

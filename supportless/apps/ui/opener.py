@@ -103,12 +103,12 @@ class Uploads:
         safe = _safe_name(name)
         suffix = Path(safe).suffix.lower()
         if suffix not in MODEL_SUFFIXES + SKELETON_SUFFIXES:
-            raise InputError(f"{name}: not a model the app opens; send a rigged glTF (.glb, .gltf) or a mesh "
+            raise InputError(None, f"{name}: not a model the app opens; send a rigged glTF (.glb, .gltf) or a mesh "
                              f"({', '.join(MODEL_SUFFIXES[2:])}) with its .tgf skeleton")
         if not content:
-            raise InputError(f"{name}: the file is empty; send the file again")
+            raise InputError(None, f"{name}: the file is empty; send the file again")
         if len(content) > MAX_UPLOAD_BYTES:
-            raise InputError(f"{name}: {len(content) / 2**20:.0f} MB is more than the "
+            raise InputError(None, f"{name}: {len(content) / 2**20:.0f} MB is more than the "
                              f"{MAX_UPLOAD_BYTES // 2**20} MB a page may send; open it with `supportless view FILE`")
         with self._lock:
             path = self.folder / safe

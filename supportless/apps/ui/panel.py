@@ -114,8 +114,8 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
 #: The page's side of a drop: each file dropped anywhere on the page goes through the Open model button's own
 #: file input, one after another (a skeleton first, so the mesh after it opens with it). viser offers no drop
 #: target and renders its HTML widget's markup as it is, so a broken image's error handler installs it, once.
-_DROP_SCRIPT = """(function(){const id='%(uuid)s';const w=window;if(w.__slDrop){w.__slDrop.id=id;return;}
-const st=w.__slDrop={id:id};const wait=t=>new Promise(r=>setTimeout(r,t));
+_DROP_SCRIPT = """(function(){if(window.__slDrop)return;window.__slDrop=true;
+const wait=t=>new Promise(r=>setTimeout(r,t));const sel='input[type=file][accept="%(accept)s"]';
 document.addEventListener('dragover',e=>{if(e.dataTransfer&&[...e.dataTransfer.types].includes('Files')){
 e.preventDefault();document.body.classList.add('sl-drag');}});
 document.addEventListener('dragleave',()=>document.body.classList.remove('sl-drag'));
@@ -123,16 +123,17 @@ document.addEventListener('drop',async e=>{document.body.classList.remove('sl-dr
 if(!e.dataTransfer||!e.dataTransfer.files.length)return;e.preventDefault();
 const tgf=f=>f.name.toLowerCase().endsWith('.tgf');
 const files=[...e.dataTransfer.files].sort((a,b)=>tgf(b)-tgf(a));
-for(const f of files){const input=document.getElementById('file_upload_'+st.id);
-const button=document.getElementById(st.id);if(!input)return;
+for(const f of files){const input=document.querySelector(sel);if(!input)return;
+const button=document.getElementById(input.id.replace('file_upload_',''));
 const dt=new DataTransfer();dt.items.add(f);input.files=dt.files;
 input.dispatchEvent(new Event('change',{bubbles:true}));await wait(300);
 for(let i=0;i<6000&&button&&button.disabled;i++)await wait(100);await wait(300);}});})();"""
 
 
-def drop_zone_html(uuid: str, kinds: str) -> str:
-    """The drop zone of the Open model folder, whose script sends dropped files through upload button ``uuid``."""
-    script = (_DROP_SCRIPT % {"uuid": uuid}).replace("\n", "").replace('"', "&quot;")
+def drop_zone_html(accept: str, kinds: str) -> str:
+    """The drop zone of the Open model folder, whose script sends dropped files through the upload button whose
+    file input accepts ``accept`` (the Open model button's own list)."""
+    script = (_DROP_SCRIPT % {"accept": accept}).replace("\n", "").replace('"', "&quot;")
     return (f'<div id="supportless-dropzone" style="border:2px dashed #5a6b85;border-radius:6px;padding:10px;'
             f'margin:4px 8px;color:#1d2a3a;font-size:0.9em;text-align:center">'
             f'Drop a model anywhere on this page: {kinds}; a mesh with its .tgf skeleton (both at once)'
@@ -148,6 +149,8 @@ class Panel:
     gui : viser.GuiApi
     app : supportless.apps.ui.app.App
         Receives the actions (``undo``, ``start_optimize``, ``save_pose``...).
+    previous : Panel, optional
+        The panel of the model shown before, whose status line and Open model folder this one keeps.
 
     Attributes
     ----------
@@ -162,17 +165,21 @@ class Panel:
         Show the model standing or as printed (a label of :data:`VIEWS`).
     """
 
-    def __init__(self, gui, app):
+    def __init__(self, gui, app, previous: Panel | None = None):
         self.gui = gui
         self.app = app
         self.rig = app.rig
-        gui.configure_theme(control_width="large", dark_mode=False)
-        self.status = gui.add_markdown("**Status:** ready")
-        self._add_open_folder()
+        self._folders: list = []
+        if previous is None:
+            gui.configure_theme(control_width="large", dark_mode=False)
+            self.status = gui.add_markdown("**Status:** ready")
+            self._add_open_folder()
+        else:  # the status line and the Open model folder stay (an upload in flight keeps its button)
+            self.status, self.upload_model = previous.status, previous.upload_model
         if self.rig is None:  # nothing open yet: the page invites a model
             return
         self.names = self.rig.bone_names()
-        with gui.add_folder("Energies"):
+        with self._folder("Energies"):
             self.measures = gui.add_markdown("computing…")
         self._add_pose_folder()
         self._add_search_folder(app.state.settings)
@@ -180,22 +187,35 @@ class Panel:
         self._add_front_folder()
         self._add_files_folder()
 
+    def close(self) -> None:
+        """Remove the folders of this model (the status line and the Open model folder stay for the next)."""
+        for folder in self._folders:
+            folder.remove()
+        self._folders.clear()
+
     # ----------------------------------------------------------------- build
+    def _folder(self, label: str, **options):
+        """A folder of this model's, removed by :meth:`close`."""
+        folder = self.gui.add_folder(label, **options)
+        self._folders.append(folder)
+        return folder
+
     def _add_open_folder(self) -> None:
         g, app = self.gui, self.app
         kinds = ", ".join(MODEL_SUFFIXES)
+        accept = ",".join(MODEL_SUFFIXES + SKELETON_SUFFIXES)
         with g.add_folder("Open model", expand_by_default=self.rig is None):
             self.upload_model = g.add_upload_button(
-                "Open model…", icon=None, mime_type=",".join(MODEL_SUFFIXES + SKELETON_SUFFIXES),
+                "Open model…", icon=None, mime_type=accept,
                 hint="A rigged glTF (.glb, or .gltf with its buffers inside), or a mesh: send its .tgf skeleton "
                      "first (or drop both at once); a mesh alone gets a skeleton built from its shape")
-            g.add_html(drop_zone_html(self.upload_model._impl.uuid, kinds))
+            g.add_html(drop_zone_html(accept, kinds))
         self.upload_model.on_upload(lambda _e: app.receive_upload(self.upload_model.value.name,
                                                                   self.upload_model.value.content))
 
     def _add_pose_folder(self) -> None:
         g, app = self.gui, self.app
-        with g.add_folder("Pose"):
+        with self._folder("Pose"):
             self.bone = g.add_dropdown("Bone", self.names, initial_value=self.names[0],
                                        hint="Bone to rotate; you can also click a joint")
             self.sliders = []
@@ -256,7 +276,7 @@ class Panel:
 
     def _add_search_folder(self, settings: SearchSettings) -> None:
         g, app = self.gui, self.app
-        with g.add_folder("Optimize"):
+        with self._folder("Optimize"):
             self.settings = {name: g.add_number(label, getattr(settings, name), **limits)
                              for name, label, limits in NUMBER_SETTINGS}
             self.settings["overhang_model"] = g.add_dropdown(
@@ -282,7 +302,7 @@ class Panel:
 
     def _add_slice_folder(self) -> None:
         g, app = self.gui, self.app
-        with g.add_folder("Slice", expand_by_default=False):
+        with self._folder("Slice", expand_by_default=False):
             self.slicer = g.add_dropdown("Slicer", tuple(SLICERS), initial_value=next(iter(SLICERS)),
                                          hint="The slicer run on the rest pose and the current pose, as printed")
             self.slice = g.add_button("Slice rest pose and this pose", color="blue",
@@ -302,7 +322,7 @@ class Panel:
 
     def _add_front_folder(self) -> None:
         g, app = self.gui, self.app
-        with g.add_folder("Front", expand_by_default=False):
+        with self._folder("Front", expand_by_default=False):
             self.front_count = g.add_slider("Poses", min=2, max=9, step=1, initial_value=5)
             self.find_front = g.add_button("Find front",
                                            hint="Poses from least support to least distortion (about 3 searches)")
@@ -333,7 +353,7 @@ class Panel:
     def _add_files_folder(self) -> None:
         g, app, name = self.gui, self.app, self.rig.name
         state = app.state
-        with g.add_folder("Files", expand_by_default=False):
+        with self._folder("Files", expand_by_default=False):
             dl_stl, dl_3mf = g.add_button("Download STL"), g.add_button("Download 3MF")
             dl_pose = g.add_button("Download pose JSON", hint="The pose, its print rotation and the locked bones")
             upload = g.add_upload_button("Upload pose…", mime_type="application/json")

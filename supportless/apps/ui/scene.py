@@ -29,7 +29,7 @@ MESH_COLOR = (45, 85, 135)
 RISKY_COLORS = ((250, 205, 60), (245, 130, 40), (215, 35, 35))  # little / more / most support
 INTERSECT_COLOR = (200, 40, 220)
 SUPPORT_COLOR = (255, 160, 60)
-SUPPORT_OPACITY = 0.45
+SUPPORT_OPACITY = 0.3
 BONE_FREE_COLOR = (20, 40, 90)
 BONE_FIXED_COLOR = (120, 120, 120)
 BONE_LOCKED_COLOR = (150, 20, 20)
@@ -220,6 +220,9 @@ class Scene:
         Scene units per model unit: the print frame's millimetres per unit, so
         every model is drawn at its printed size whatever its file's units
         (a 79 m glTF fox printed 60 mm tall is 60 units tall in the view).
+    mesh_key : int
+        Names the skinned surface's node (``/surface/KEY``): each model opened in one page has its own
+        (see :meth:`close`).
 
     Attributes
     ----------
@@ -228,7 +231,7 @@ class Scene:
     """
 
     def __init__(self, server, rig, on_joint_click: Callable[[int], None],
-                 on_gizmo: Callable[[str, np.ndarray], None], scale: float = 1.0):
+                 on_gizmo: Callable[[str, np.ndarray], None], scale: float = 1.0, mesh_key: int = 0):
         self.server = server
         self.rig = rig
         self.scale = float(scale)
@@ -248,7 +251,7 @@ class Scene:
         self._add_plate(s, float((rest @ self.up).min()))
         m = rig.bone_count
         self.h_mesh = s.add_mesh_skinned(
-            "/model/mesh", rest.astype(np.float32), self.faces,
+            f"/surface/{mesh_key}", rest.astype(np.float32), self.faces,
             bone_wxyzs=np.tile([1.0, 0, 0, 0], (m, 1)), bone_positions=self.roots,
             skin_weights=np.asarray(rig.weights, np.float64), color=MESH_COLOR, opacity=MESH_OPACITY,
             side="double" if rig.dim == 2 else "front", flat_shading=False)
@@ -318,6 +321,15 @@ class Scene:
                 c.position, c.look_at = cam.position, cam.look_at
             except Exception:  # noqa: BLE001 - a page that is closing keeps its camera
                 pass
+
+    def close(self) -> None:
+        """Take this model out of the view, for another scene to be drawn in its place.
+
+        The skinned surface is hidden, not removed: viser's page fails (a script error) when a skinned mesh
+        is removed, so each model's surface has a node of its own; everything else is removed or replaced.
+        """
+        self.h_mesh.visible = False
+        self.server.scene.remove_by_name("/model")
 
     # ------------------------------------------------------------------ draw
     def set_opacity(self, opacity: float) -> None:

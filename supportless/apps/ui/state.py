@@ -31,6 +31,7 @@ Every change is announced to the listeners of :meth:`EditorState.subscribe` as `
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
 from pathlib import Path
@@ -41,7 +42,7 @@ import numpy as np
 from ...base.errors import InputError
 from ...base.geometry import place_on_plate, print_pose, print_transform
 from ...base.kinematics import matrix_to_euler
-from ...base.scratch import scratch_dir
+from ...base.scratch import file_bytes, scratch_dir
 from ...copyleft.cgal import intersecting_faces
 from ...energies.overhang import risky_faces
 from ...files import posefile
@@ -79,14 +80,6 @@ def _check_frame(frame: str) -> str:
     if frame not in FRAMES:
         raise ValueError(f"frame must be one of {FRAMES}, not {frame!r}")
     return frame
-
-
-def _file_bytes(name: str, write: Callable[[Path], None]) -> bytes:
-    """The bytes ``write(path)`` puts in a temporary file called ``name``."""
-    with scratch_dir("supportless-ui-") as tmp:
-        path = Path(tmp) / name
-        write(path)
-        return path.read_bytes()
 
 
 class EditorState:
@@ -368,10 +361,14 @@ class EditorState:
         """
         p = self.resolve_path(path, new=True)
         angles, R = self.get_pose()
-        extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict(),
-                 "print_frame": self.print_frame.to_dict()}
-        posefile.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra, rotation=R, tree=self.rig.tree)
+        extra = {"objective": float(self.objective(angles, R)), "settings": self.settings.to_dict()}
+        posefile.write_pose(p, angles, self.rig.bones, self.rig.joints, extra=extra | self._pose_extra(), rotation=R,
+                            tree=self.rig.tree)
         return p
+
+    def _pose_extra(self) -> dict:
+        """What a pose file keeps beside the pose: the print frame and the locked bones (the search's ``fix``)."""
+        return {"print_frame": self.print_frame.to_dict(), "locked": list(self.settings.fix)}
 
     def load_pose(self, path) -> Path:
         """Make a pose file written for this skeleton the current pose and print rotation (undoable).
@@ -395,7 +392,10 @@ class EditorState:
 
     def _load_pose_file(self, p: Path) -> None:
         angles = posefile.read_pose(p, self.rig.bones, tree=self.rig.tree, root_bone=self.rig.root_bone)
-        self.set_angles(angles, rotation=posefile.read_print_rotation(p, self.rig.dim))
+        rotation = posefile.read_print_rotation(p, self.rig.dim)
+        if isinstance(locked := json.loads(p.read_text()).get("locked"), list):  # the bones locked when saved
+            self.update_settings(fix=",".join(str(x) for x in locked))
+        self.set_angles(angles, rotation=rotation)
 
     def load_pose_bytes(self, name: str, content: bytes) -> None:
         """Load an uploaded pose file's content (same checks as :meth:`load_pose`)."""
@@ -407,9 +407,9 @@ class EditorState:
     def pose_bytes(self) -> bytes:
         """The current pose and print rotation as a pose JSON file's bytes."""
         angles, R = self.get_pose()
-        return _file_bytes("pose.json", lambda p: posefile.write_pose(p, angles, self.rig.bones, self.rig.joints,
+        return file_bytes("pose.json", lambda p: posefile.write_pose(p, angles, self.rig.bones, self.rig.joints,
                                                                  rotation=R, tree=self.rig.tree,
-                                                                 extra={"print_frame": self.print_frame.to_dict()}))
+                                                                 extra=self._pose_extra()))
 
     def posed_on_plate(self) -> np.ndarray:
         """The current posed surface standing, its lowest point on the plate.
@@ -486,7 +486,7 @@ class EditorState:
     def mesh_bytes(self, fmt: str, frame: str = "print") -> bytes:
         """The posed mesh (on the plate, by default as printed) as a file's bytes, ``fmt`` in stl/3mf/obj/ply."""
         V = self.print_frame.place(self._frame_vertices(frame))
-        return _file_bytes(f"mesh.{fmt}", lambda p: write_mesh(p, V, self.rig.faces))
+        return file_bytes(f"mesh.{fmt}", lambda p: write_mesh(p, V, self.rig.faces))
 
     # ---------------------------------------------------- settings, measures
     def _objective_for(self, settings: SearchSettings) -> Objective:

@@ -1,0 +1,172 @@
+"""The browser app's parts that need no browser: uploads checked as the CLI checks files, the support preview's
+boxes, the figures in human units, the rule a pose breaks in words, and the Slice button's background run."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from slicers import fake_exe, stand_in_slicer
+
+from supportless.apps.ui import opener
+from supportless.apps.ui.readout import broken_rules, grams, volume_text
+from supportless.apps.ui.scene import column_boxes
+from supportless.apps.ui.slicerun import SliceRun, slice_markdown
+from supportless.base.errors import InputError
+from supportless.energies.support import support_columns, support_volume
+from supportless.slicing.choice import SlicerChoice
+
+
+# --------------------------------------------------------------------------- #
+# uploads
+# --------------------------------------------------------------------------- #
+@pytest.fixture
+def uploads():
+    u = opener.Uploads()
+    yield u
+    u.close()
+    assert not u.folder.exists()
+
+
+def test_a_skeleton_waits_for_its_mesh_and_a_gltf_needs_none(uploads):
+    assert uploads.receive("figure.tgf", b"1 0 0 0\n2 0 1 0\n#\n1 2\n") is None
+    mesh = uploads.receive("figure.obj", b"v 0 0 0\n")
+    assert mesh.parent == uploads.folder and mesh.read_bytes() == b"v 0 0 0\n"
+    assert uploads.skeleton_for(mesh).name == "figure.tgf"
+    assert uploads.skeleton_for(mesh) is None  # used once
+    uploads.receive("figure.tgf", b"x")
+    assert uploads.skeleton_for(uploads.receive("Fox.glb", b"glTF")) is None  # a glTF has its own skeleton
+
+
+@pytest.mark.parametrize("name, content, words", [
+    ("notes.txt", b"hello", "notes.txt: not a model the app opens"),
+    ("empty.stl", b"", "empty.stl: the file is empty"),
+])
+def test_a_bad_upload_is_one_line_naming_the_file(uploads, name, content, words):
+    with pytest.raises(InputError) as e:
+        uploads.receive(name, content)
+    assert str(e.value).startswith(words) and "\n" not in str(e.value)
+    assert list(uploads.folder.iterdir()) == []
+
+
+def test_an_upload_over_the_limit_is_refused(uploads, monkeypatch):
+    monkeypatch.setattr(opener, "MAX_UPLOAD_BYTES", 10)
+    with pytest.raises(InputError, match="big.stl: 0 MB is more than the 0 MB a page may send"):
+        uploads.receive("big.stl", b"x" * 11)
+
+
+def test_an_upload_never_leaves_the_folder(uploads):
+    for name in ("../../evil.obj", "/etc/passwd.stl", "..\\..\\win.glb", ".hidden.obj"):
+        path = uploads.receive(name, b"data")
+        assert path.parent == uploads.folder and not path.name.startswith(".")
+
+
+# --------------------------------------------------------------------------- #
+# support preview
+# --------------------------------------------------------------------------- #
+def test_support_columns_are_the_columns_the_estimate_sums(tpose_rig):
+    rig = tpose_rig
+    V = rig.pose(rig.rest_angles())
+    bottoms, heights, cell, basis = support_columns(V, rig.faces, rig.up, 45.0, 48)
+    assert len(heights) > 0 and np.all(heights > 0)
+    assert np.allclose(basis @ basis.T, np.eye(3)) and np.allclose(basis[2], rig.up)
+    expected = support_volume(V, rig.faces, rig.up, 45.0, 48, backend="numpy")
+    assert float((heights * cell ** 2).sum()) == pytest.approx(expected, rel=1e-12)
+    # every column's foot stands on the plate or on the body below, never under the plate
+    assert (bottoms @ rig.up).min() >= (V @ rig.up).min() - 1e-9
+
+
+def test_column_boxes_are_closed_boxes_of_the_columns_volume():
+    import trimesh
+
+    rng = np.random.default_rng(3)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    basis = Q * np.sign(np.linalg.det(Q))  # a right-handed frame
+    bottoms, heights = rng.normal(size=(4, 3)) * 10, rng.uniform(0.5, 3.0, 4)
+    V, F = column_boxes(bottoms, heights, 0.7, basis)
+    assert V.shape == (32, 3) and F.shape == (48, 3)
+    for k in range(4):
+        box = trimesh.Trimesh(V[8 * k:8 * k + 8], F[12 * k:12 * k + 12] - 8 * k, process=False)
+        assert box.is_watertight and box.volume == pytest.approx(heights[k] * 0.49)  # outward: positive
+        assert np.allclose(box.vertices.mean(axis=0), bottoms[k] + heights[k] / 2 * basis[2])
+
+
+# --------------------------------------------------------------------------- #
+# figures in words and human units
+# --------------------------------------------------------------------------- #
+def test_volumes_read_in_printed_millimetres_and_grams():
+    assert grams(1000.0) == pytest.approx(1.24)  # 1 cm³ of PLA
+    assert volume_text(9.48, 10.0) == "9,480 mm³ ≈ 11.8 g"  # 9.48 units³ at 10 mm per unit
+    assert volume_text(0.5, 1.0) == "0.5 mm³ ≈ 0.00 g"
+    assert volume_text(None, 1.0) == "n/a"
+
+
+def test_a_pose_past_a_joint_limit_is_named(tpose_rig):
+    from supportless.search.settings import SearchSettings
+
+    rig = tpose_rig
+    objective = SearchSettings(joint_limit=45.0).objective(rig)
+    angles = rig.rest_angles()
+    assert broken_rules(objective, angles) == []
+    b = rig.bone_count - 1
+    angles[b, 2] = np.radians(60.0)
+    rules = broken_rules(objective, angles)
+    assert any(f"bone {b + 1} ({rig.bone_names()[b]}) turns 60° at its joint, past its 45° joint limit" in r
+               for r in rules), rules
+    assert objective(angles) > 1000  # what the words explain
+
+
+# --------------------------------------------------------------------------- #
+# the Slice button's run
+# --------------------------------------------------------------------------- #
+def _box_mesh(h):
+    import trimesh
+
+    m = trimesh.creation.box((10, 10, h))
+    return m.vertices + [0, 0, h / 2], m.faces
+
+
+def test_slice_run_reports_the_slicers_figures(tmp_path, monkeypatch):
+    exe = fake_exe(tmp_path, "prusa-slicer", stand_in_slicer("float(rec['v'][:, :, 2].max())"))
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", exe)
+    done = []
+    run = SliceRun(lambda report, error: done.append((report, error)))
+    assert run.start(_box_mesh(20.0), _box_mesh(5.0), SlicerChoice("prusa"))
+    assert not run.start(_box_mesh(20.0), _box_mesh(5.0), SlicerChoice("prusa"))  # one at a time
+    assert run.wait(120)
+    (report, error), = done
+    assert error is None
+    assert report["before"]["support_mm"] == pytest.approx(20.0) and report["after"]["support_mm"] == pytest.approx(5.0)
+    assert report["reduction_percent"] == pytest.approx(75.0)
+    text = slice_markdown(report)
+    assert "**75.0 % less support** than the rest pose" in text and "| support filament | 20 mm | 5 mm |" in text
+
+
+def test_slice_run_says_a_failing_slicer_in_one_line_and_cancel_stops_it(tmp_path, monkeypatch):
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", fake_exe(tmp_path, "broken", """\
+        import sys
+        if "--help" in sys.argv: print("PrusaSlicer-0.0"); sys.exit(0)
+        print("error: the model is outside the bed", file=sys.stderr); sys.exit(1)
+        """))
+    done = []
+    run = SliceRun(lambda report, error: done.append((report, error)))
+    run.start(_box_mesh(20.0), _box_mesh(5.0), SlicerChoice("prusa"))
+    assert run.wait(120)
+    (report, error), = done
+    assert report is None and "outside the bed" in error and "\n" not in error
+    # a slicer that hangs: cancel kills it and says nothing after
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", fake_exe(tmp_path, "slow", """\
+        import sys, time
+        if "--help" in sys.argv: print("PrusaSlicer-0.0"); sys.exit(0)
+        time.sleep(600)
+        """))
+    done.clear()
+    run.start(_box_mesh(20.0), _box_mesh(5.0), SlicerChoice("prusa"))
+    assert run.running
+    time.sleep(1.0)  # let it start its slicers: cancel must stop those too
+    assert run.cancel()
+    assert run.wait(30) and done == []
+    import subprocess
+
+    assert subprocess.run(["pgrep", "-f", str(tmp_path / "slow")], capture_output=True).returncode == 1  # none left
