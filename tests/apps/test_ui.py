@@ -429,15 +429,15 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             page.wait_for_function("c => document.body.innerText.includes('Support (columns, as printed): ' + c)",
                                    arg=rest_text.split("Support (columns, as printed): ")[1].split(" mm³")[0],
                                    timeout=30000)
-            for label, value in (("Particles", "20"), ("Iterations", "10")):
+            for label, value in (("Particles", "12"), ("Iterations", "6")):
                 box = page.get_by_label(label)
                 box.fill(value)
                 box.press("Tab")
-            assert _until(lambda: app.state.settings.particles == 20 and app.state.settings.iterations == 10)
+            assert _until(lambda: app.state.settings.particles == 12 and app.state.settings.iterations == 6)
             page.get_by_role("button", name="Optimize").click()
             page.get_by_text(re.compile("search finished")).wait_for(timeout=300000)
-            # two phases of 10 iterations, for the mirrored search and the free one (the branch has a mirror plane)
-            assert "iteration 40 / 40" in page.locator("body").inner_text()
+            # two phases of 6 iterations, for the mirrored search and the free one (the branch has a mirror plane)
+            assert "iteration 24 / 24" in page.locator("body").inner_text()
             assert app.wait_idle()
             # the panel shows the measures of the pose the search left (rendered by the page, so polled)
             assert _until(lambda: "less than rest" in energies.inner_text())

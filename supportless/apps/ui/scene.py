@@ -301,10 +301,11 @@ class Scene:
             on_gizmo(phase, self._turn.T @ matrix_from_quat(event.target.wxyz))
 
     def _place_camera(self, centre: np.ndarray, rest: np.ndarray) -> None:
-        """Look at the model's broad side (across its longer horizontal extent), a little from above."""
+        """Look at the model's broad side (across its longer horizontal extent), a little from above: from the
+        front of a figure made +Y up facing +Z (glTF) or +Z up facing -Y (CAD), the conventions' front."""
         up = self.up
         side = _perpendicular(up)
-        front = np.cross(up, side)
+        front = np.cross(side, up)
         if np.ptp(rest @ front) > np.ptp(rest @ side):  # longer along "front": look along "side" instead
             side, front = front, -side
         cam = self.server.initial_camera
