@@ -27,12 +27,13 @@ import platform
 import subprocess
 import sys
 import tempfile
+from pathlib import Path
 from typing import Callable
 
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from .bench import SHARED_DATA
 
-__all__ = ["CASES", "TARGETS", "format_table", "measure_case", "run_targets"]
+__all__ = ["BIG_CASES", "CASES", "TARGETS", "big_model", "format_table", "measure_case", "run_targets"]
 
 CASES = ("bunny", "bb-bunny", "character", "robot", "bunny111k")
 
@@ -40,6 +41,54 @@ CASES = ("bunny", "bb-bunny", "character", "robot", "bunny111k")
 #: the 111k case also prepares within 60 s in at most 6 GB).
 TARGETS = {"bunny": "search ≤ 4 s", "bb-bunny": "search ≤ 2× bunny", "character": "search ≤ 20 s",
            "robot": "search ≤ 20 s", "bunny111k": "prepare ≤ 60 s, search ≤ 20 s, ≤ 6 GB"}
+
+
+#: The sculpt-sized cases of issue 39 (:func:`big_model`): measured as the command line runs them, end to end.
+BIG_CASES = {"bunny4": "the bunny subdivided four times (trimesh), 1 783 296 triangles",
+             "bunny5m": "the bunny's triangles each split in three at its centroid, then subdivided four times, "
+                        "5 349 888 triangles"}
+
+
+def big_model(case: str, folder=None) -> tuple[Path, Path]:
+    """The OBJ and TGF of a case of :data:`BIG_CASES`, made from the shared bunny once and kept in ``folder``.
+
+    Made in a child process (so a measured process's memory is its own), deterministically: the shared
+    ``bunny.obj`` subdivided by trimesh (midpoints, the shape unchanged), written as OBJ next to a copy of
+    ``bunny.tgf``. ``folder`` defaults to ``$SUPPORTLESS_BENCH_CACHE``, else ``supportless-bench`` in the
+    temporary folder.
+
+    Returns
+    -------
+    mesh, skeleton : pathlib.Path
+    """
+    folder = Path(folder or os.environ.get("SUPPORTLESS_BENCH_CACHE")
+                  or Path(tempfile.gettempdir()) / "supportless-bench")
+    mesh, skeleton = folder / f"{case}.obj", folder / f"{case}.tgf"
+    if not (mesh.is_file() and skeleton.is_file()):
+        folder.mkdir(parents=True, exist_ok=True)
+        subprocess.run([sys.executable, "-m", "supportless.apps.bench_targets", "--make", case, str(folder)],
+                       check=True, env=dict(os.environ))
+    return mesh, skeleton
+
+
+def _make_big_model(case: str, folder: Path) -> None:
+    """Write ``case``.obj and ``case``.tgf of :func:`big_model` into ``folder``."""
+    import numpy as np
+    import trimesh
+
+    from ..files.meshes import read_mesh, write_mesh
+
+    V, F = read_mesh(SHARED_DATA / "bunny.obj")
+    if case == "bunny5m":  # each triangle split in three at its centroid: 3 x 4^4 x 6966 triangles in the end
+        C = np.arange(len(V), len(V) + len(F))
+        V = np.vstack([V, V[F].mean(axis=1)])
+        F = np.concatenate([np.column_stack([F[:, 0], F[:, 1], C]), np.column_stack([F[:, 1], F[:, 2], C]),
+                            np.column_stack([F[:, 2], F[:, 0], C])])
+    mesh = trimesh.Trimesh(V, F, process=False)
+    for _ in range(4):
+        mesh = mesh.subdivide()
+    write_mesh(folder / f"{case}.obj", mesh.vertices, mesh.faces)
+    (folder / f"{case}.tgf").write_bytes((SHARED_DATA / "bunny.tgf").read_bytes())
 
 
 def _missing(case: str) -> str | None:
@@ -234,6 +283,8 @@ def format_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-if __name__ == "__main__":  # the child process of run_targets
+if __name__ == "__main__" and sys.argv[1] == "--make":  # the child process of big_model
+    _make_big_model(sys.argv[2], Path(sys.argv[3]))
+elif __name__ == "__main__":  # the child process of run_targets
     print(json.dumps(measure_case(sys.argv[1], reference="--reference" in sys.argv[2:],
                                   choice="--choice" in sys.argv[2:])))
