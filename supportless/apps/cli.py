@@ -17,6 +17,7 @@ import numpy as np
 from ..base.errors import InputError
 from ..base.interrupt import deferred_interrupt
 from ..base.interrupt import requested as interrupt_requested
+from ..base.progress import listening, step
 from ..files.paths import check_output_paths
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..search.settings import RANGES, SearchSettings
@@ -280,14 +281,15 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if slice_rank_count:
         _require_slicer("--slice-rank", choice)
     _check_bones_early(settings, model, skeleton)
-    rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units,
-                       bones=bones, skeleton_out=skeleton_out)
+    with listening(_announce(console, quiet)):
+        rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units,
+                           bones=bones, skeleton_out=skeleton_out)
     if slice_rank_count and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     if slice_check_flag and rig.dim != 3:
         _fail(f"{model}: --slice-check slices 3D models only; this one is planar")
     _say_frame(rig, frame, quiet)
-    with deferred_interrupt():  # Ctrl-C stops the search; what it found is still written
+    with deferred_interrupt(), listening(_announce(console, quiet)):  # Ctrl-C stops the search; what it found is still written
         front = _run_front(rig, console, settings, pareto_count, pareto_method, quiet) if pareto_count else None
         result = front.default if front else _run_search(rig, console, settings, quiet)
         if result.interrupted:
@@ -301,7 +303,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
 
             extra["pareto"], front_written = write_front(rig, front, output, frame)
             extra["pareto_seconds"] = front.seconds
-        report = build_report(rig, result, frame) | extra
+        with step("measuring the report (rest and found pose, full resolution)"):
+            report = build_report(rig, result, frame) | extra
         written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures, frame,
                                          upright=upright_out)
         if front is not None:
@@ -324,6 +327,14 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if stopped:
         click.echo("supportless: interrupted: the best pose found so far is written", err=True)
         sys.exit(EXIT_INTERRUPTED)
+
+
+def _announce(console, quiet: bool):
+    """A :mod:`supportless.base.progress` listener: one line as each long step starts (none with ``quiet``)."""
+    def listen(event, name, seconds):
+        if event == "start" and not quiet:
+            console.print(f"  {name} ...", highlight=False)
+    return listen
 
 
 def _check_bones_early(settings, model, skeleton) -> None:

@@ -25,6 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .skinning import WeightBlocks, skin_blocks, weight_blocks
+
 
 def bone_parents(bones: np.ndarray) -> np.ndarray:
     """Parent of each bone: the bone whose tip is its root joint.
@@ -479,6 +481,12 @@ def stack_transforms(transforms: np.ndarray) -> np.ndarray:
 #: 25 ms sparse against 27 ms dense; a glTF skin (2 %) 3-5 ms against 39-41 ms.
 SPARSE_LBS = 0.75
 
+#: A 3D surface whose skinning matrix would take more than this many bytes as an array is skinned from its
+#: weights (:class:`~supportless.base.skinning.WeightBlocks`) and never builds the matrix: the bunny subdivided
+#: twice (111 456 triangles, 20 MB) and the 68-bone character (33 MB) keep the matrix, sculpts of millions of
+#: triangles (the bunny subdivided four times: 314 MB) do not.
+LBS_MATRIX_BYTES = 128 * 2**20
+
 
 def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
     """The skinning matrix of :func:`lbs_matrix` in the form :func:`skin` runs fastest on.
@@ -491,8 +499,14 @@ def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
     Returns
     -------
     M : (n, m*(d+1)) float64 array, or a scipy.sparse CSR matrix when fewer
-        than :data:`SPARSE_LBS` of its entries are non-zero.
+        than :data:`SPARSE_LBS` of its entries are non-zero, or for a 3D
+        surface whose matrix would exceed :data:`LBS_MATRIX_BYTES`, its
+        :class:`~supportless.base.skinning.WeightBlocks` (posed to the same
+        bits as the CSR matrix).
     """
+    n, d = np.shape(vertices)
+    if d == 3 and n * np.shape(weights)[1] * (d + 1) * 8 > LBS_MATRIX_BYTES:
+        return weight_blocks(vertices, weights)
     M = lbs_matrix(vertices, weights)
     if np.count_nonzero(M) < SPARSE_LBS * M.size:
         from scipy.sparse import csr_matrix
@@ -597,10 +611,11 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    M : (n, m*(d+1)) float64 array or scipy.sparse CSR matrix
+    M : (n, m*(d+1)) float64 array, scipy.sparse CSR matrix or WeightBlocks
         From :func:`lbs_matrix` or :func:`lbs_operator`. A sparse one is
         applied by a compiled loop over its (vertex, bone) blocks
-        (:func:`bone_blocks`), parallel over poses.
+        (:func:`bone_blocks`), parallel over poses; weight blocks the same way
+        (:func:`~supportless.base.skinning.skin_blocks`).
     transforms : (P, m, d, d+1) or (m, d, d+1) float64
 
     Returns
@@ -608,6 +623,8 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     vertices : (P, n, d) or (n, d) float64
     """
     T = stack_transforms(transforms)
+    if isinstance(M, WeightBlocks):
+        return skin_blocks(M, T[None])[0] if T.ndim == 2 else skin_blocks(M, T)
     if not hasattr(M, "indptr"):
         return np.matmul(M, T)
     single = T.ndim == 2

@@ -228,7 +228,18 @@ def edge_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         Number of faces using each edge.
     """
     E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    return np.unique(E, axis=0, return_counts=True)
+    keys, counts = np.unique(_pair_keys(E), return_counts=True)  # one int64 a pair: as np.unique(axis=0), faster
+    n = _key_base(E)
+    return np.column_stack([keys // n, keys % n]).astype(E.dtype, copy=False), counts
+
+
+def _key_base(pairs: np.ndarray) -> int:
+    return int(pairs.max()) + 1 if pairs.size else 1
+
+
+def _pair_keys(pairs: np.ndarray) -> np.ndarray:
+    """One int64 per row of ``pairs`` (k, 2) non-negative ints, ordered as the rows are lexicographically."""
+    return pairs[:, 0].astype(np.int64) * _key_base(pairs) + pairs[:, 1]
 
 
 def check_closed_surface(F: np.ndarray, path=None) -> None:
@@ -257,9 +268,8 @@ def check_closed_surface(F: np.ndarray, path=None) -> None:
         )
     if nonmanifold:
         raise InputError(path, f"surface is not manifold: {nonmanifold} edges are shared by more than two faces")
-    directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    _, dcounts = np.unique(directed, axis=0, return_counts=True)
-    if np.any(dcounts > 1):
+    directed = np.sort(_pair_keys(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])))
+    if np.any(directed[1:] == directed[:-1]):
         raise InputError(path, "surface is not consistently oriented: some neighbouring faces have opposite winding")
 
 

@@ -13,13 +13,14 @@ from typing import Callable
 
 import numpy as np
 
+from ..base.progress import step
 from ..files.gltf import is_gltf, posed_joint_transforms, write_posed_gltf
 from ..files.meshes import write_json, write_mesh
 from ..files.posefile import write_pose
 from ..files.printframe import PrintFrame
 from .report import write_pictures
 
-__all__ = ["write_posed", "write_result"]
+__all__ = ["pictures_step", "write_posed", "write_result"]
 
 
 def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.ndarray, vertices: np.ndarray,
@@ -58,6 +59,12 @@ def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.n
     return "mesh, as printed" if vertices is not standing else "mesh"
 
 
+def pictures_step(folder, rig, result, report) -> list[tuple[str, str]]:
+    """:func:`~supportless.report.report.write_pictures`, announced as a step."""
+    with step("drawing the pictures"):
+        return write_pictures(folder, rig, result, report)
+
+
 def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, upright=None, pose=None,
                  pictures=None, report_path=None) -> tuple[list[tuple[str, str]], list[tuple[str, OSError]]]:
     """Write the files of ``result`` that are asked for; a file that cannot be written does not stop the others.
@@ -82,7 +89,8 @@ def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, u
         ``(path, error)`` of each file that could not be written.
     """
     def posed(path, vertices, standing_label=False):
-        kind = write_posed(path, rig, result.angles, result.vertices, vertices, frame)
+        with step(f"writing {os.path.basename(path)}"):
+            kind = write_posed(path, rig, result.angles, result.vertices, vertices, frame)
         return [(f"posed {kind.replace('as printed', 'standing') if standing_label else kind}", path)]
 
     def pose_file():
@@ -99,7 +107,7 @@ def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, u
     steps: list[tuple[object, Callable[[], list]]] = [
         (output, lambda: posed(output, result.print_vertices)),
         (upright, lambda: posed(upright, result.vertices, standing_label=True)),
-        (pose, pose_file), (pictures, lambda: write_pictures(pictures, rig, result, report)),
+        (pose, pose_file), (pictures, lambda: pictures_step(pictures, rig, result, report)),
         (report_path, report_file)]
     written, failed = [], []
     for path, write in steps:

@@ -8,6 +8,7 @@ a search's pose side by side as the JSON report of ``optimize``;
 
 from __future__ import annotations
 
+import copy
 import datetime as _dt
 import os
 import platform
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..base.geometry import place_on_plate, print_transform
+from ..base.geometry import place_on_plate, print_pose, print_transform
 from ..copyleft.cgal import intersecting_face_pairs
 from ..energies.intersection import self_intersection_volume
 from ..energies.overhang import overhang_energy, risky_area, risky_faces
@@ -341,6 +342,14 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
     posed = result.vertices
     shift_rest = rest[0] - rig.vertices[0]
     shift_posed = posed[0] - rig.pose(result.angles)[0]
+    drawn = _drawn_rig(rig)
+    if drawn is not rig:  # a sculpt drawn as its proxy, placed where the full surface stands
+        R = np.asarray(result.rotation, np.float64)
+        rest, posed = drawn.vertices + shift_rest, drawn.pose(result.angles) + shift_posed
+        result = copy.copy(result)
+        result.vertices = posed
+        result.print_vertices = print_pose(posed, R, rig.up) if not np.allclose(R, np.eye(rig.dim)) else posed
+        rig = drawn
     joints_rest = rig.joints + shift_rest
     joints_posed = rig.posed_joints(result.angles) + shift_posed
     risky = rig.dim == 3
@@ -382,6 +391,18 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")
     return written + [("convergence plot", str(convergence))]
+
+
+#: A surface with more triangles than this is drawn as its simplified proxy (:meth:`~supportless.rig.rig.Rig.coarse_rig`):
+#: a picture of 1.8 million triangles took 49 s and 3.4 GB and looks the same as one of 10 000.
+DRAWN_FACES = 200_000
+
+
+def _drawn_rig(rig):
+    """The rig whose surface the pictures draw: the proxy of a surface past :data:`DRAWN_FACES`, else ``rig``."""
+    if len(rig.faces) <= DRAWN_FACES or rig.coarse_faces is None:
+        return rig
+    return rig.coarse_rig()
 
 
 def _fmt_pct(x) -> str:

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..base.errors import InputError
 from ..base.geometry import parse_up
+from ..base.progress import step
 from ..files.meshes import read_dmat, read_mesh, read_tet_mesh, read_tgf
 from ..files.solid import closed_solid
 from ..files.upaxis import guess_up
@@ -109,8 +110,9 @@ def load_rig(model, skeleton=None, up="auto", *, cache: bool = True, cache_dir=N
     else:
         mesh_path = Path(model)
         skel_path = Path(skeleton) if skeleton not in (None, "auto") else mesh_path.with_suffix(".tgf")
-        V, F = read_mesh(mesh_path)
-        V, F = closed_solid(V, F, mesh_path, notes)
+        with step("reading the mesh"):
+            V, F = read_mesh(mesh_path)
+            V, F = closed_solid(V, F, mesh_path, notes)
         if _is_auto(up):
             up, up_note = guess_up(V, F, mesh_path) if V.shape[1] == 3 and np.any(V[:, 2] != 0) else ("y", None)
         if skeleton == "auto" or (skeleton is None and not skel_path.exists()):

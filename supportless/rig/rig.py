@@ -19,6 +19,7 @@ import numpy as np
 from ..base import kinematics as kin
 from ..base.errors import InputError
 from ..base.geometry import parse_up, points_in_triangles, signed_volume
+from ..base.progress import step
 from ..copyleft.cgal import self_intersects
 from ..files.joints import JOINT_INSIDE_MARGIN, JOINT_OUTSIDE_TOLERANCE, pull_joints_inside  # noqa: F401 (re-exported)
 from ..files.meshes import check_closed_surface, check_not_flat
@@ -413,8 +414,9 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     if coarse is not None:
         from ..files.printbody import transfer_values
 
-        Ws = transfer_values(V, Vc, Fc, Wc[: len(Vc)])
-        TV, TT, W = np.vstack([V, TVc]), TTc + len(V), np.vstack([Ws / Ws.sum(1, keepdims=True), Wc])
+        with step("weights onto the full surface"):
+            Ws = transfer_values(V, Vc, Fc, Wc[: len(Vc)])
+            TV, TT, W = np.vstack([V, TVc]), TTc + len(V), np.vstack([Ws / Ws.sum(1, keepdims=True), Wc])
         warnings = list(warnings) + [f"{len(F)} triangles: the volume mesh and the search use the surface "
                                      f"simplified to {len(Fc)}; outputs and reports are full resolution"]
     elif skinned:

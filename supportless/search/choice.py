@@ -31,6 +31,7 @@ from ..energies.slicer_model import predicted_support_mm
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
+from .objective import POSED_VERTICES
 from .result import PoseResult, measured_at
 
 __all__ = ["CHECKS_PER_KIND", "KINDS", "PER_KIND", "PREDICTION_TOLERANCE", "Candidate", "Choice", "candidate_answers", "choose", "pool_of", "print_distance_deg",
@@ -247,8 +248,12 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
                            same[0] if same else None))
     up = np.asarray(rig.up, np.float64)
     scale = float(height_mm) / float(np.ptp(rig.vertices @ up))
-    V = np.stack([place_on_plate(rig.vertices, up)] + [r.print_vertices for _, r, _ in picked])
-    predicted = predicted_support_mm(V, rig.faces, up, float(result.settings.overhang_angle), scale)
+    # a few answers at a time on a sculpt (its answers stacked took gigabytes), else all at once
+    surfaces = [place_on_plate(rig.vertices, up)] + [r.print_vertices for _, r, _ in picked]
+    chunk = max(1, POSED_VERTICES // len(rig.vertices))
+    predicted = np.concatenate([np.atleast_1d(predicted_support_mm(np.stack(surfaces[i:i + chunk]), rig.faces, up,
+                                                                   float(result.settings.overhang_angle), scale))
+                                for i in range(0, len(surfaces), chunk)])
     candidates = [Candidate(kind, r, float(p), same_as=j) for (kind, r, j), p in zip(picked, predicted[1:])]
     # the turns with the least predicted support, and the one the search's objective likes best (the first)
     turns = [c for c in candidates if c.kind == "turn"]

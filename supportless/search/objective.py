@@ -72,6 +72,11 @@ SEARCH_WEIGHT_FLOOR = 1e-4
 #: in one; a swarm of 5000 on the bunny peaks at 298 MB instead of 1059 MB (``benchmarks/memory.py``).
 POSE_CHUNK = 256
 
+#: ... and any batch in chunks of at most this many posed vertices (:meth:`Objective.raw_terms` too): a dense
+#: surface's poses are measured a few at a time (the bunny subdivided four times, 891 648 vertices: 8 poses,
+#: 190 MB of posed vertices), the 111 456-triangle bunny's 143 at a time, smaller rigs as before.
+POSED_VERTICES = 8_000_000
+
 #: Printed height (mm) at which the ``slicer`` overhang model measures a pose (as the report does).
 SLICER_MODEL_HEIGHT_MM = REFERENCE_HEIGHT_MM
 
@@ -262,8 +267,18 @@ class Objective:
             ``prior`` (dimensionless) and ``violation`` (0 for a pose that
             keeps the hard rules).
         """
+        chunk = self._chunk()
+        if np.ndim(angles) == 3 and len(angles) > chunk:  # per pose, the same values: in chunks
+            turns = rotations is not None and np.ndim(rotations) == 3
+            parts = [self.raw_terms(angles[i:i + chunk], rotations[i:i + chunk] if turns else rotations)
+                     for i in range(0, len(angles), chunk)]
+            return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
         transforms, V = self._posed(angles)
         return self._cheap_terms(angles, transforms, V, rotations) | {"intersection": self._intersection(V)}
+
+    def _chunk(self) -> int:
+        """Poses measured at once: :data:`POSE_CHUNK`, fewer on a dense surface (:data:`POSED_VERTICES`)."""
+        return max(1, min(POSE_CHUNK, POSED_VERTICES // max(len(self.rig.vertices), 1)))
 
     def chain_excess(self, transforms: np.ndarray) -> np.ndarray:
         """How far the chain ends turn past ``chain_limit``: the sum over ends, radians, (P,) float64 (0 when off)."""
@@ -407,11 +422,12 @@ class Objective:
 
     def _bounded_overlap(self, angles, bound, rotations, intersection_bound=np.inf):
         """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule."""
-        if len(angles) > POSE_CHUNK:
-            parts = [self._bounded_overlap(angles[i:i + POSE_CHUNK], bound[i:i + POSE_CHUNK],
-                                           None if rotations is None else rotations[i:i + POSE_CHUNK],
+        chunk = self._chunk()
+        if len(angles) > chunk:
+            parts = [self._bounded_overlap(angles[i:i + chunk], bound[i:i + chunk],
+                                           None if rotations is None else rotations[i:i + chunk],
                                            intersection_bound)
-                     for i in range(0, len(angles), POSE_CHUNK)]
+                     for i in range(0, len(angles), chunk)]
             return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
         excess = np.asarray(self.prior.excess(angles), np.float64)
         # past a joint limit, against a bound that keeps the rules: INFEASIBLE + excess is a lower bound above it

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..base.geometry import place_on_plate, print_pose
 from ..base.interrupt import deferred_interrupt
+from ..base.progress import step
 from ..energies.slicer_model import predicted_support_mm
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
@@ -154,8 +155,10 @@ def _optimize(rig, settings, objective, start, start_rotation, callback, interse
             found = _PoseSearch(rig, settings, objective or settings.objective(rig), start, start_rotation, callback,
                                 intersects).run(t0)
         if found.alternatives and found.settings.choose and rig.dim == 3 and not found.interrupted:
-            found = choose(rig, found)
-    return as_written(rig, found)
+            with step("weighing the answers"):
+                found = choose(rig, found)
+    with step("exact self-intersection check as written"):
+        return as_written(rig, found)
 
 
 def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects) -> PoseResult:
@@ -227,7 +230,8 @@ def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_
     proxy = settings.objective(coarse, full.arap_data, full.volume)
     found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
                         intersects).run(t0)
-    chosen = on_full_surface(rig, found, full, t0)
+    with step("measuring the best poses on the full surface"):
+        chosen = on_full_surface(rig, found, full, t0)
     if not polish or chosen.interrupted:
         return chosen
     polished = _PoseSearch(rig, settings.replace(polish=polish), full, chosen.angles, chosen.rotation,

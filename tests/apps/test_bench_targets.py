@@ -39,3 +39,13 @@ def test_a_case_without_a_proxy_is_its_own_reference():
            "search_s": 10.0, "peak_mb": 300.0, "reduction": 60.0, "distortion": 0.01, "value": 0.4, "pairs": 0}
     line = bt.format_table([row]).splitlines()[-1]
     assert "the same search" in line and "| 6966 |" in line and "11 (7)" in line
+
+
+def test_a_sculpt_is_reported_end_to_end_against_its_target(tmp_path, monkeypatch):
+    row = {"case": "bunny4", "faces": 1783296, "bones": 11, "end_to_end_s": 50.0, "peak_mb": 2900.0,
+           "reduction": 40.0, "distortion": 0.01, "value": 0.4, "pairs": 0}
+    table = bt.format_table([row])
+    assert "| bunny4 | 1783296 | 11 | 50.0 s | 2900 MB |" in table and "end to end ≤ 60 s, ≤ 3 GB" in table
+    monkeypatch.setattr(bt, "SHARED_DATA", tmp_path)  # no bunny: skipped, nothing made
+    rows = bt.run_targets(cases=("bunny5m",), echo=lambda s: None)
+    assert rows[0]["missing"] and "bunny.obj" in rows[0]["error"]

@@ -57,3 +57,57 @@ def test_self_intersects_agrees_with_the_pairs():
     assert self_intersects(V1, F1) is False
     with pytest.raises(ValueError):
         self_intersects(np.zeros((3, 2)), np.array([[0, 1, 2]]))
+
+
+def _planted(seed):
+    """Two subdivided spheres that overlap, one with vertices pushed through its own far side: many pairs."""
+    import trimesh
+
+    rng = np.random.default_rng(seed)
+    a, b = trimesh.creation.icosphere(3), trimesh.creation.icosphere(3)
+    Va, Vb = a.vertices.copy(), b.vertices + [1.3, 0.2, 0.1]
+    pushed = rng.choice(len(Va), 6, replace=False)
+    Va[pushed] *= -0.8  # through the sphere to its other side
+    return np.vstack([Va, Vb]), np.vstack([a.faces, b.faces + len(Va)]).astype(np.int64)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_check_in_parts_finds_the_pairs_of_the_whole_surface(monkeypatch, seed):
+    """A surface past PART_FACES is checked in slabs: the same pairs, the same first-pair verdict."""
+    import supportless.copyleft.cgal as cgal
+
+    V, F = _planted(seed)
+    reported = intersecting_faces(V, F)
+    whole = np.unique(np.sort(reported, axis=1), axis=0)
+    assert len(whole) == len(reported) > 10  # each pair once: the count is the same
+    monkeypatch.setattr(cgal, "PART_FACES", 400)  # 2560 triangles: 7 slabs
+    assert len(cgal.face_parts(V, F, 7)) == 7
+    np.testing.assert_array_equal(intersecting_faces(V, F), whole)
+    assert self_intersects(V, F) is True
+    import trimesh
+
+    clean = trimesh.creation.icosphere(4)  # 5120 triangles, none crossing
+    assert intersecting_faces(clean.vertices, clean.faces).shape == (0, 2)
+    assert self_intersects(clean.vertices, clean.faces) is False
+
+
+def test_a_large_surface_asked_again_is_answered_from_memory(monkeypatch):
+    """The pairs of the same vertices and faces (the report's count of a pose the search checked) cost no
+    second CGAL call; a moved vertex does."""
+    import supportless.copyleft.cgal as cgal
+
+    V, F = _planted(2)
+    monkeypatch.setattr(cgal, "PART_FACES", 400)
+    monkeypatch.setattr(cgal, "_answers", cgal.OrderedDict())
+    calls = []
+    real = cgal._cgal
+    monkeypatch.setattr(cgal, "_cgal", lambda *a: calls.append(1) or real(*a))
+    first = intersecting_faces(V, F)
+    n = len(calls)
+    assert self_intersects(V.copy(), F.copy()) and len(calls) == n
+    np.testing.assert_array_equal(intersecting_faces(V, F), first)
+    assert len(calls) == n
+    W = V.copy()
+    W[0] += 1e-9
+    intersecting_faces(W, F)
+    assert len(calls) > n

@@ -236,6 +236,26 @@ def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch
     assert sizes == [5, 5, 5, 5, 3]
 
 
+def test_a_dense_surface_is_measured_a_few_poses_at_a_time_with_the_same_terms(rig, monkeypatch):
+    """POSED_VERTICES bounds the posed vertices of one chunk (a sculpt's batch took gigabytes): terms,
+    bounded values and rotations per pose are those of one batch."""
+    from supportless.search import objective as objective_mod
+
+    obj = sl.Objective(rig)
+    A = random_angles(rig, 11, scale=0.6, seed=4)
+    R = np.stack([np.eye(3)] * 11)
+    whole, bounded = obj.terms(A, R), obj.bounded(A, np.full(11, np.inf))
+    sizes = []
+    posed = obj._posed
+    monkeypatch.setattr(objective_mod, "POSED_VERTICES", 4 * len(rig.vertices))
+    monkeypatch.setattr(obj, "_posed", lambda angles, search=False: sizes.append(len(angles)) or posed(angles, search))
+    chunked = obj.terms(A, R)
+    for key in whole:
+        np.testing.assert_array_equal(chunked[key], whole[key])
+    np.testing.assert_array_equal(obj.bounded(A, np.full(11, np.inf)), bounded)
+    assert sizes == [4, 4, 3] * 2
+
+
 def test_bounded_overlap_reports_the_intersection_volume_it_computed(rig):
     obj = sl.Objective(rig)
     obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
