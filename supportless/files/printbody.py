@@ -31,8 +31,9 @@ import numpy as np
 from ..base.errors import InputError
 from ..base.isolated import NativeFailure
 from ..copyleft.cgal import intersecting_faces, self_union
+from .simplify import simplify_surface
 
-__all__ = ["BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body", "simplify_surface",
+__all__ = ["BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body",
            "transfer_values"]
 
 #: Closed shells below this fraction of the total volume are dropped (slivers,
@@ -596,40 +597,6 @@ def _hull(points: np.ndarray):
     solid = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.ascontiguousarray(points[used], np.float64),
                                                   tri_verts=np.ascontiguousarray(remap[F], np.uint64)))
     return None if solid.status() != manifold3d.Error.NoError or solid.is_empty() else solid
-
-
-def simplify_surface(vertices: np.ndarray, faces: np.ndarray, max_faces: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """A closed surface simplified to at most ``max_faces`` triangles (libigl's ``decimate``).
-
-    Shortest edges collapse first, to their midpoints (the even triangles a
-    volume mesh and its weights need; quadric placement left slivers that
-    made the weight solve fail); collapses that would make the surface cross
-    itself are refused.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-    faces : (f, 3) int64
-        Closed, manifold.
-    max_faces : int
-
-    Returns
-    -------
-    simplified : ((n', 3) float64, (f', 3) int64) or None
-        None when the result is not a closed, consistently oriented surface.
-    """
-    import igl
-
-    from .meshes import check_closed_surface
-
-    U, G, _, _ = igl.decimate(np.asfortranarray(vertices, np.float64), np.asfortranarray(faces, np.int32),
-                              int(max_faces), True)
-    U, G = np.ascontiguousarray(U, np.float64), np.ascontiguousarray(G, np.int64)
-    try:
-        check_closed_surface(G)
-    except InputError:
-        return None
-    return (U, G) if _volume(U, G) > 0 else (U, G[:, ::-1].copy())
 
 
 def transfer_values(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, values: np.ndarray) -> np.ndarray:

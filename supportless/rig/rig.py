@@ -478,7 +478,7 @@ def _near_origin(V, J, tet_mesh, skinned):
 
 def _simplified(V, F, say):
     """The surface simplified to :data:`PROXY_TARGET` triangles, or None."""
-    from ..files.printbody import simplify_surface
+    from ..files.simplify import simplify_surface
 
     say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
     return simplify_surface(V, F, PROXY_TARGET)
