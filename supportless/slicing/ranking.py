@@ -23,6 +23,7 @@ import numpy as np
 
 from ..files.printer import PrinterProfile
 from ..files.printframe import REFERENCE_HEIGHT_MM
+from ..files.simplify import SLICE_FACES, reduced_alike
 from ..rig.rig import Rig
 from ..search.choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from ..search.optimizer import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
@@ -101,6 +102,9 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
                  choice: SlicerChoice | None = None) -> PoseResult:
     """Slice the best few answers and return the one with the least support by the slicer (PrusaSlicer's default).
 
+    A sculpt's answers (over :data:`~supportless.files.simplify.SLICE_FACES` triangles) are sliced from copies
+    reduced by the same collapses (:func:`~supportless.files.simplify.reduced_alike`); what is written stays whole.
+
     Parameters
     ----------
     rig : Rig
@@ -149,7 +153,8 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     t0 = time.perf_counter()
     scale = scale_for_height(rig.vertices, rig.up, height_mm)
     poses = [choice.candidates[i].result for i in picked]
-    sliced = (slice_fn or slice_support)([(p.print_vertices, rig.faces) for p in poses], rig.up, scale, timeout,
+    posed, faces = reduced_alike([p.print_vertices for p in poses], rig.faces, SLICE_FACES)  # a sculpt: lighter
+    sliced = (slice_fn or slice_support)([(V, faces) for V in posed], rig.up, scale, timeout,
                                          config=config, workers=workers, slicer=slicer, profile=profile,
                                          names=[f"answer-{i + 1}" for i in picked], by_feature=True,
                                          choice=slicer_choice)

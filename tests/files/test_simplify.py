@@ -56,3 +56,15 @@ def test_a_figure_of_the_zoo_is_not_pre_reduced(sphere):
     V, F = sphere  # 20 480 triangles: well under PRE_REDUCTION_FACES
     U, G = simplify._pre_reduced(V, F, 10000)
     assert U is V and G is F
+
+
+def test_poses_reduced_alike_share_their_faces_and_follow_their_pose(sphere):
+    V, F = sphere
+    R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])
+    moved = V @ R.T + [5.0, 0, 0]  # a rigid motion of the whole surface
+    (a, b), G = simplify.reduced_alike([V, moved], F, 2000)
+    assert len(G) <= 2000 and a.shape == b.shape
+    check_closed_surface(G)
+    assert np.allclose(b, a @ R.T + [5.0, 0, 0], atol=1e-4)  # the same collapses, replayed on the moved pose
+    same, H = simplify.reduced_alike([V], F, len(F))  # small enough: as it is
+    assert np.array_equal(same[0], V) and np.array_equal(H, F)
