@@ -159,7 +159,8 @@ class App:
                 self.server.scene.reset()  # the welcome
             else:
                 self.scene.close()
-            self.panel.close()
+            if self.panel is not None:
+                self.panel.close()
             self._opened += 1
             state = EditorState(rig, self.base_settings, self.workdir, frame)
             self.rig, self.state, self.slice_report = rig, state, None
