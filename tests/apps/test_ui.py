@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import unavailable
+from slicers import fake_exe, stand_in_slicer
 
 from supportless.apps.ui import App, find_free_port
 from supportless.base.errors import InputError
@@ -368,9 +369,13 @@ def _number(text: str, label: str) -> float:
 
 
 @pytest.mark.slow
-def test_page_in_chromium(rig, tmp_path, chromium):
+def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
+    # the search's answers are chosen by a stand-in PrusaSlicer (the real one is tested with the CLI): seconds, not minutes
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", fake_exe(tmp_path, "prusa-slicer", stand_in_slicer(
+        "float(rec['v'][:, :, 2].max() - rec['v'][:, :, 2].min())")))
     sync_playwright = _playwright()
     app = App(rig, verbose=False, workdir=tmp_path)
+    app.set_view(show_support=False)  # translucent columns make a software-rendered page slow to answer
     errors: list[str] = []
     try:
         with sync_playwright() as p:
@@ -395,13 +400,13 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             assert app.state.selected == rig.bone_count - 1
             slider = page.get_by_role("slider").nth(2)
             slider.focus()
-            for _ in range(25):
+            for _ in range(10):
                 slider.press("ArrowRight")
             page.wait_for_function(
                 "o => { const t = document.body.innerText.match(/Objective:\\s*([-+0-9.eE]+)/);"
                 " return t && Math.abs(parseFloat(t[1]) - o) > 1e-9; }", arg=rest_objective, timeout=30000)
             app.wait_idle()
-            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(10.0, abs=1e-6)
             moved_text = energies.inner_text()
             assert _number(moved_text, "Objective") != rest_objective
             assert _number(moved_text, "ARAP term") > _number(rest_text, "ARAP term")
@@ -412,7 +417,7 @@ def test_page_in_chromium(rig, tmp_path, chromium):
             posefile.write_pose(bad, np.zeros((len(bones), 3)), bones)
             page.locator("input[type=file][accept='application/json']").set_input_files(str(bad))
             page.get_by_text(re.compile("Error:.*skeleton")).first.wait_for(timeout=30000)
-            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(25.0, abs=1e-6)
+            assert np.degrees(app.state.get_angles()[-1, 2]) == pytest.approx(10.0, abs=1e-6)
             # the posed mesh as an STL download
             page.get_by_text("Files", exact=True).click()
             with page.expect_download(timeout=30000) as dl:
