@@ -60,8 +60,11 @@ SLICE_FACES = 200_000
 def reduced_alike(vertex_sets: list[np.ndarray], faces: np.ndarray, max_faces: int):
     """Several poses of one surface reduced by the same collapses, so they stay poses of one mesh.
 
-    The collapses are those of the first pose (``fast_simplification``'s quadric collapses), replayed on the
-    others. A surface of at most ``max_faces`` triangles is returned as it is.
+    The collapses are those of the first pose (``fast_simplification``'s quadric collapses). Each reduced
+    vertex takes, in every pose, the position of one of the vertices collapsed into it: a point of that pose's
+    surface (replaying the collapses' quadric placement on a bent pose put vertices far off the body, and a
+    slicer refused the mesh as taller than its printer). A surface of at most ``max_faces`` triangles is
+    returned as it is.
 
     Parameters
     ----------
@@ -81,8 +84,11 @@ def reduced_alike(vertex_sets: list[np.ndarray], faces: np.ndarray, max_faces: i
     import fast_simplification
 
     F = np.asarray(faces, np.int32)
-    _, G, collapses = fast_simplification.simplify(np.asarray(vertex_sets[0], np.float32), F, target_count=max_faces,
-                                                   return_collapses=True)
-    reduced = [np.asarray(fast_simplification.replay_simplification(np.asarray(V, np.float32), F, collapses)[0],
-                          np.float64) for V in vertex_sets]
-    return reduced, np.asarray(G, np.int64)
+    first = np.asarray(vertex_sets[0], np.float32)
+    _, _, collapses = fast_simplification.simplify(first, F, target_count=max_faces, return_collapses=True)
+    _, G, into = fast_simplification.replay_simplification(first, F, collapses)  # into: (n,) reduced vertex of each
+    order = np.argsort(into, kind="stable")
+    starts = np.r_[True, into[order][1:] != into[order][:-1]]
+    kept = np.empty(int(into.max()) + 1, np.int64)
+    kept[into[order][starts]] = order[starts]  # one original vertex per reduced vertex
+    return [np.asarray(V, np.float64)[kept] for V in vertex_sets], np.asarray(G, np.int64)
