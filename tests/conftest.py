@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import time
 from pathlib import Path
 
 import numpy as np
@@ -265,3 +266,14 @@ def branch_app(branch_rig, tmp_path_factory):
     assert a.wait_idle(60)
     yield a
     a.stop()
+
+
+def until(condition, timeout: float = 300.0) -> bool:
+    """Poll ``condition()`` until it holds (True) or ``timeout`` seconds pass (False): a wait for a state, not a
+    fixed delay, so a slow machine takes longer but reaches the same verdict."""
+    end = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > end:
+            return False
+        time.sleep(0.05)
+    return True

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import re
 import socket
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import unavailable
+from conftest import until as _until
 from slicers import fake_exe, stand_in_slicer
 
 from supportless.apps.ui import App, find_free_port
@@ -26,17 +26,6 @@ from supportless.search.orientation import rotation_between
 from supportless.search.settings import SearchSettings
 
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
-
-
-def _until(condition, timeout: float = 300.0) -> bool:
-    """Poll ``condition()`` until it holds (True) or ``timeout`` seconds pass (False): a wait for a state, not a
-    fixed delay, so a slow machine takes longer but reaches the same verdict."""
-    end = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > end:
-            return False
-        time.sleep(0.05)
-    return True
 
 
 @pytest.fixture(scope="module")

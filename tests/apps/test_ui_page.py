@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import unavailable
+from conftest import until as _until
 from slicers import fake_exe, stand_in_slicer
 
 from supportless.apps.ui import App
@@ -30,15 +31,6 @@ MIN_MODEL_SHARE = 0.01
 MIN_CONTRAST = 3.0
 
 pytestmark = pytest.mark.slow
-
-
-def _until(condition, timeout: float = 120.0) -> bool:
-    end = time.monotonic() + timeout
-    while not condition():
-        if time.monotonic() > end:
-            return False
-        time.sleep(0.05)
-    return True
 
 
 @pytest.fixture(scope="module")

@@ -78,9 +78,9 @@ def broken_rules(objective, angles: np.ndarray, names: list[str] | None = None) 
     transforms = rig.transforms(angles)
     if objective.chain_limit is not None:
         d = rig.dim
-        from ...search.naturalness import rotation_angle_deg
+        from ...search.naturalness import chain_ends, rotation_angle_deg
 
-        ends = objective._ends
+        ends = chain_ends(rig)
         world = rotation_angle_deg(transforms[ends, :d, :d])
         for k in np.flatnonzero(world > objective.chain_limit + 1e-9):
             b = int(ends[k])
