@@ -303,7 +303,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
 
             extra["pareto"], front_written = write_front(rig, front, output, frame)
             extra["pareto_seconds"] = front.seconds
-        with step("measuring the report (rest and found pose, full resolution)"):
+        with step("measuring the report (rest and found pose)"):
             report = build_report(rig, result, frame) | extra
         written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures, frame,
                                          upright=upright_out)

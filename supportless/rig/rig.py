@@ -265,6 +265,42 @@ class Rig:
         return Rig(self.tet_vertices[n:n + nc], Fc, self.joints, self.bones, self.tet_vertices[n:], self.tets - n,
                    self.tet_weights[n:], self.up, name=self.name, info={"warnings": []}, labels=self.labels)
 
+    def measure_rig(self) -> Rig | None:
+        """A sculpt's rig on its surface quickly reduced, where the search measures it; None for other models.
+
+        Past :data:`~supportless.files.simplify.FAST_FIRST_FACES` triangles (a sculpt searched through its
+        proxy), what the search measures "on the full surface" (the best poses re-scored, the polish, the
+        answers weighed and their exact checks) is measured on the surface reduced to
+        :data:`~supportless.files.simplify.FAST_FIRST_TARGET` triangles
+        (:func:`~supportless.files.simplify.quickly_reduced`: closed, uncrossed), with the full surface's
+        weights at its vertices; the same joints, volume mesh and proxy. What is written is the full surface
+        posed, checked exactly there (:func:`supportless.search.result.as_written`). Made once per rig.
+        """
+        from ..files.simplify import FAST_FIRST_FACES
+
+        if self.coarse_faces is None or self.dim != 3 or len(self.faces) <= FAST_FIRST_FACES:
+            return None
+        if "_measure_rig" not in self.__dict__:
+            self.__dict__["_measure_rig"] = self._reduced_rig()
+        return self.__dict__["_measure_rig"]
+
+    def _reduced_rig(self) -> Rig | None:
+        """:meth:`measure_rig`, made (None when the quick reduction is not clean)."""
+        from ..files.printbody import transfer_values
+        from ..files.simplify import FAST_FIRST_TARGET, quickly_reduced
+
+        with step(f"the surface reduced to {FAST_FIRST_TARGET} triangles for measuring"):
+            reduced = quickly_reduced(self.vertices, self.faces, FAST_FIRST_TARGET)
+            if reduced is None:
+                return None
+            U, G = reduced
+            W = transfer_values(U, self.vertices, self.faces, self.weights)
+            W /= np.maximum(W.sum(1, keepdims=True), 1e-300)
+        n, k = len(self.vertices), len(U)
+        return Rig(U, G, self.joints, self.bones, np.vstack([U, self.tet_vertices[n:]]), self.tets - n + k,
+                   np.vstack([W, self.tet_weights[n:]]), self.up, name=self.name, info={"warnings": []},
+                   labels=self.labels, coarse_faces=self.coarse_faces - n + k)
+
     def rest_angles(self) -> np.ndarray:
         """(m, 3) float64 zeros: the rest pose."""
         return np.zeros((self.bone_count, 3))
@@ -375,8 +411,9 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
     skinned = surface_weights is not None
     coarse = simplified = None
     V, J, tet_mesh, moved = _near_origin(V, J, tet_mesh, skinned)
-    V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
-                                           pivots_only=pivots_only)
+    with step("checking the surface and the joints"):
+        V, F, J, dim, warnings = _check_inputs(V, F, J, B, up, mesh_path, skeleton_path, joints_inside=not skinned,
+                                               pivots_only=pivots_only)
     up_vec = parse_up(up, dim)
     t0 = time.perf_counter()
     if skinned:
@@ -476,36 +513,43 @@ def _near_origin(V, J, tet_mesh, skinned):
     return V - centre, J, tet_mesh, -centre
 
 
-def _simplified(V, F, say):
+def _simplified(V, F, say, fast_first=True):
     """The surface simplified to :data:`PROXY_TARGET` triangles, or None."""
     from ..files.simplify import simplify_surface
 
     say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
-    return simplify_surface(V, F, PROXY_TARGET)
+    with step(f"proxy: {len(F)} triangles simplified to {PROXY_TARGET}"):
+        return simplify_surface(V, F, PROXY_TARGET, fast_first)
 
 
 def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_path, say):
     """Volume mesh and weights of the surface simplified to :data:`PROXY_TARGET` triangles.
 
     Returns ``(Vc, Fc, TVc, TTc, Wc)``, or None when the simplified surface
-    cannot be meshed or weighted (then the full surface is).
+    cannot be meshed or weighted (then the full surface is). A sculpt's proxy
+    made the fast way first (:func:`supportless.files.simplify.simplify_surface`)
+    is made again the slow way when it cannot be.
     """
+    from ..files.simplify import FAST_FIRST_FACES
     from .tetmesh import tetrahedralize_with_skeleton
 
-    simplified = _simplified(V, F, say)
-    if simplified is None:
-        return None
-    Vc, Fc = simplified
-    try:
-        Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path)
-        say("tetrahedralising")
-        TVc, TTc = tetrahedralize_with_skeleton(Vc, Fc, Jc, B, samples_per_bone)
-        say("computing bounded biharmonic weights")
-        Wc = compute_weights(TVc, TTc, Jc, B, bbw_iterations)
-    except (InputError, RuntimeError):
-        say("the simplified surface could not be meshed; meshing the full surface")
-        return None
-    return Vc, Fc, TVc, TTc, Wc
+    for fast_first in (True, False)[: 1 + (len(F) > FAST_FIRST_FACES)]:
+        simplified = _simplified(V, F, say, fast_first)
+        if simplified is None:
+            continue
+        Vc, Fc = simplified
+        try:
+            Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path)
+            say("tetrahedralising")
+            with step("proxy: volume mesh and weights"):
+                TVc, TTc = tetrahedralize_with_skeleton(Vc, Fc, Jc, B, samples_per_bone)
+                say("computing bounded biharmonic weights")
+                Wc = compute_weights(TVc, TTc, Jc, B, bbw_iterations)
+        except (InputError, RuntimeError):
+            continue
+        return Vc, Fc, TVc, TTc, Wc
+    say("the simplified surface could not be meshed; meshing the full surface")
+    return None
 
 
 def _attach_surface(V, TV, TT, path):

@@ -149,14 +149,16 @@ def _optimize(rig, settings, objective, start, start_rotation, callback, interse
     with deferred_interrupt():
         t0 = time.perf_counter()
         coarse = rig.coarse_rig() if objective is None else None
+        measure = rig
         if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
-            found = _search_proxy(rig, coarse, settings, start, start_rotation, callback, intersects, t0)
+            measure = rig.measure_rig() or rig  # (a sculpt: on its surface reduced for measuring)
+            found = _search_proxy(measure, coarse, settings, start, start_rotation, callback, intersects, t0)
         else:
             found = _PoseSearch(rig, settings, objective or settings.objective(rig), start, start_rotation, callback,
                                 intersects).run(t0)
         if found.alternatives and found.settings.choose and rig.dim == 3 and not found.interrupted:
             with step("weighing the answers"):
-                found = choose(rig, found)
+                found = choose(measure, found)
     with step("exact self-intersection check as written"):
         return as_written(rig, found)
 
@@ -228,15 +230,17 @@ def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_
         return None if callback is None else report
 
     proxy = settings.objective(coarse, full.arap_data, full.volume)
-    found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
-                        intersects).run(t0)
+    with step("searching on the proxy"):
+        found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
+                            intersects).run(t0)
     with step("measuring the best poses on the full surface"):
         chosen = on_full_surface(rig, found, full, t0)
     if not polish or chosen.interrupted:
         return chosen
-    polished = _PoseSearch(rig, settings.replace(polish=polish), full, chosen.angles, chosen.rotation,
-                           progress(seen["iterations"], seen["iterations"]), intersects,
-                           polish_only=True).run(time.perf_counter())
+    with step("polishing on the full surface"):
+        polished = _PoseSearch(rig, settings.replace(polish=polish), full, chosen.angles, chosen.rotation,
+                               progress(seen["iterations"], seen["iterations"]), intersects,
+                               polish_only=True).run(time.perf_counter())
     stats = dict(chosen.stats, full_polish_value=polished.value,
                  full_polish_evaluations=polished.stats["polish_evaluations"],
                  full_exact_calls=chosen.stats["full_exact_calls"] + polished.stats.get("exact_calls", 0))

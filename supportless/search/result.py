@@ -4,6 +4,8 @@
 * :func:`measured_at`: a result moved to another pose and print rotation;
 * :func:`on_full_surface`: a result found on a simplified proxy, measured
   and checked for exact self-intersection on the full surface;
+* :func:`at_full_resolution`: a result measured on a sculpt's reduced surface
+  (:meth:`Rig.measure_rig`), posed on the full one;
 * :func:`as_written`: the last gate. The mesh that goes to the file (full
   resolution, in the print frame) must not have more intersecting triangle
   pairs than the rest pose; if it does, the rest pose is written instead
@@ -24,7 +26,8 @@ from ..rig.rig import Rig
 from .objective import Objective
 from .settings import SearchSettings
 
-__all__ = ["FULL_CHECKS", "PoseResult", "as_written", "measured_at", "on_full_surface"]
+__all__ = ["FULL_CHECKS", "PoseResult", "as_written", "at_full_resolution", "faces_of", "measured_at",
+           "on_full_surface"]
 
 
 @dataclass
@@ -187,6 +190,40 @@ def on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float
     return dataclasses.replace(measured, stats=stats, runtime_seconds=time.perf_counter() - t0)
 
 
+def at_full_resolution(rig: Rig, result: PoseResult) -> PoseResult:
+    """``result`` posed on ``rig``'s surface, when it was measured on another (:meth:`Rig.measure_rig`).
+
+    The pose, the print rotation, the value and the terms stay those measured; the surfaces
+    (``vertices``, ``print_vertices``) become ``rig``'s, and ``stats`` gains ``measured_faces``, the
+    triangles it was measured on. A result of ``rig``'s own surface is returned as it is.
+
+    Parameters
+    ----------
+    rig : Rig
+        Full resolution.
+    result : PoseResult
+
+    Returns
+    -------
+    result : PoseResult
+    """
+    if result.vertices.shape == rig.vertices.shape:
+        return result
+    posed = place_on_plate(rig.pose(result.angles), rig.up)
+    turned = not np.allclose(result.rotation, np.eye(rig.dim))
+    measured = len(result.objective.rig.faces) if result.objective is not None else None
+    return dataclasses.replace(result, vertices=posed, stats=dict(result.stats, measured_faces=measured),
+                               print_vertices=print_pose(posed, result.rotation, rig.up) if turned else posed)
+
+
+def faces_of(rig: Rig, result: PoseResult) -> np.ndarray:
+    """(f, 3) int64: the triangles of ``result``'s surfaces: ``rig``'s, or those of the surface it was
+    measured on when that is not ``rig``'s (an answer a sculpt's choice weighed, :meth:`Rig.measure_rig`)."""
+    if result.print_vertices.shape == rig.vertices.shape or result.objective is None:
+        return rig.faces
+    return result.objective.rig.faces
+
+
 def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     """``result`` if its mesh as written intersects itself no more than the rest pose, else the rest pose.
 
@@ -201,6 +238,8 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     rig : Rig
         Full resolution.
     result : PoseResult
+        At full resolution or measured on the sculpt's reduced surface (posed at full resolution first,
+        :func:`at_full_resolution`).
 
     Returns
     -------
@@ -209,6 +248,7 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
         pose replaced the result, ``fell_back_to_rest`` (the pairs the found
         pose had) as well.
     """
+    result = at_full_resolution(rig, result)
     if rig.dim != 3 or not result.settings.exact_intersections:
         return result
     rest_pairs = len(intersecting_faces(rig.vertices, rig.faces))

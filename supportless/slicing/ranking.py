@@ -21,13 +21,14 @@ from typing import Callable
 
 import numpy as np
 
+from ..base.progress import step
 from ..files.printer import PrinterProfile
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..files.simplify import SLICE_FACES, reduced_alike
 from ..rig.rig import Rig
 from ..search.choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from ..search.optimizer import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
-from ..search.result import as_written
+from ..search.result import as_written, faces_of
 from .choice import SlicerChoice
 from .prusaslicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
@@ -153,11 +154,12 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     t0 = time.perf_counter()
     scale = scale_for_height(rig.vertices, rig.up, height_mm)
     poses = [choice.candidates[i].result for i in picked]
-    posed, faces = reduced_alike([p.print_vertices for p in poses], rig.faces, SLICE_FACES)  # a sculpt: lighter
-    sliced = (slice_fn or slice_support)([(V, faces) for V in posed], rig.up, scale, timeout,
-                                         config=config, workers=workers, slicer=slicer, profile=profile,
-                                         names=[f"answer-{i + 1}" for i in picked], by_feature=True,
-                                         choice=slicer_choice)
+    posed, faces = reduced_alike([p.print_vertices for p in poses], faces_of(rig, poses[0]), SLICE_FACES)  # lighter
+    with step("slicing the answers"):
+        sliced = (slice_fn or slice_support)([(V, faces) for V in posed], rig.up, scale, timeout,
+                                             config=config, workers=workers, slicer=slicer, profile=profile,
+                                             names=[f"answer-{i + 1}" for i in picked], by_feature=True,
+                                             choice=slicer_choice)
     candidates = [dataclasses.replace(c) for c in choice.candidates]
     for i, mm in zip(picked, sliced.support_mm):
         candidates[i].sliced_mm = float(mm)
