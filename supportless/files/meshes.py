@@ -142,14 +142,18 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     ext = path.suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError(path, f"unknown mesh format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
-    if ext == "obj":
-        _check_obj_vertex_lines(path)
-    try:
-        loaded = trimesh.load(str(path), file_type=ext, process=False, force="mesh")
-    except Exception as exc:  # trimesh raises many types on bad files
-        raise InputError(path, f"cannot read as {ext.upper()}: {_one_line(exc)}") from None
-    V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
-    F = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
+    simple = _read_plain_obj(path) if ext == "obj" else None
+    if simple is not None:
+        V, F = simple
+    else:
+        if ext == "obj":
+            _check_obj_vertex_lines(path)
+        try:
+            loaded = trimesh.load(str(path), file_type=ext, process=False, force="mesh")
+        except Exception as exc:  # trimesh raises many types on bad files
+            raise InputError(path, f"cannot read as {ext.upper()}: {_one_line(exc)}") from None
+        V = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
+        F = np.asarray(getattr(loaded, "faces", np.zeros((0, 3))), dtype=np.int64)
     if V.ndim != 2 or (len(V) and V.shape[1] != 3):
         raise InputError(path, f"vertices have {V.shape[-1] if V.ndim == 2 else '?'} coordinates, not x y z")
     if len(V) == 0 or len(F) == 0 or F.ndim != 2 or F.shape[1] != 3:
@@ -157,6 +161,58 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     if not np.all(np.isfinite(V)):
         raise InputError(path, "vertex coordinates contain NaN or infinity")
     V, F = merge_duplicate_vertices(V, F)
+    return V, F
+
+
+#: Lines of an OBJ file :func:`_read_plain_obj` passes over (comments, names, groups, materials, smoothing).
+_OBJ_SKIPPED = (b"#", b"o ", b"g ", b"s ", b"usemtl", b"mtllib", b"vn", b"vt", b"l ")
+
+
+def _read_plain_obj(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """A plain OBJ file's vertices and triangles, read in one pass (a sculpt's 2.7 million lines in seconds,
+    where trimesh and the line check took 19 s); None for anything else, which trimesh reads.
+
+    Plain: ``v x y z`` lines of three numbers, ``f`` lines of three positive vertex indices (``i``, ``i/t``,
+    ``i/t/n`` or ``i//n``), and lines of :data:`_OBJ_SKIPPED` kinds.
+    """
+    import re
+    import warnings
+
+    try:
+        lines = path.read_bytes().replace(b"\r", b"").replace(b"\t", b" ").split(b"\n")
+    except OSError:
+        return None
+    vertex_lines, face_lines = [], []
+    for line in lines:
+        head = line[:2]
+        if head == b"v ":
+            vertex_lines.append(line[2:])
+        elif head == b"f ":
+            face_lines.append(line[2:])
+        elif line.strip() and not line.lstrip().startswith(_OBJ_SKIPPED):
+            return None
+
+    def three_words(rows):  # every row three words (a quick look; rows it cannot settle are split)
+        return all(len(r.split()) == 3 for r in rows if r.count(b" ") != 2 or b"  " in r or r.startswith(b" ")
+                   or r.endswith(b" "))
+
+    if not vertex_lines or not face_lines or not three_words(vertex_lines) or not three_words(face_lines):
+        return None
+    faces_text = b" ".join(face_lines)
+    if b"/" in faces_text:
+        faces_text = re.sub(rb"/[^ ]*", b"", faces_text)
+    with warnings.catch_warnings():  # a word that is no number: the old numpy warns and stops, the new raises
+        warnings.simplefilter("ignore")
+        try:
+            V = np.fromstring(b" ".join(vertex_lines), sep=" ")
+            F = np.fromstring(faces_text, dtype=np.int64, sep=" ")
+        except ValueError:
+            return None
+    if V.size != 3 * len(vertex_lines) or F.size != 3 * len(face_lines):
+        return None
+    V, F = V.reshape(-1, 3), F.reshape(-1, 3) - 1
+    if F.min() < 0 or F.max() >= len(V) or not np.isfinite(V).all():
+        return None
     return V, F
 
 
