@@ -581,3 +581,54 @@ def test_check_not_flat_accepts_a_thin_but_real_solid():
     V, F = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1e-3]], float), np.array([[0, 2, 1], [0, 1, 3],
                                                                                           [1, 2, 3], [0, 3, 2]])
     check_not_flat(V, F)  # a sliver 1/1000 as thick as wide still encloses volume
+
+
+OBJ_PLAIN = """# a tetrahedron as a sculpting tool writes it
+mtllib t.mtl
+o tetra
+v 0 0 0
+v 1.5 0 0\r
+v 0 1 0
+v 0 0 1e0
+vt 0.1 0.1
+vt 0.9 0.1
+vt 0.1 0.9
+vt 0.9 0.9
+vn 0 0 1
+g body
+usemtl skin
+s 1
+f 1/1/1 3/3/1 2/2/1
+f 1/1/1 2/2/1 4/4/1
+f 2/2/1 3/3/1 4/4/1
+f 1/1/1  4/4/1 3/3/1
+"""
+
+
+@pytest.mark.parametrize("text, plain", [
+    (OBJ_PLAIN, True),
+    (OBJ_PLAIN.replace("/", "//", 1).replace("//", "/", 1), True),
+    (OBJ_PLAIN.replace("f 2/2/1 3/3/1 4/4/1", "f 2/2/1 3/3/1 4/4/1 2/2/1"), False),  # a polygon: trimesh's reader
+    (OBJ_PLAIN.replace("f 2/2/1 3/3/1 4/4/1", "f -3/2/1 -2/3/1 -1/4/1"), False),  # relative indices: trimesh's
+    (OBJ_PLAIN.replace("v 0 1 0", "v 0 1 0 0.5 0.5 0.5"), False),  # vertex colours: trimesh's reader
+    (OBJ_PLAIN.replace("s 1", "curv 0 1"), False),  # a line it does not know
+])
+def test_a_plain_obj_is_read_in_one_pass_as_trimesh_reads_it(tmp_path, monkeypatch, text, plain):
+    path = tmp_path / "t.obj"
+    path.write_bytes(text.encode())
+    assert (io._read_plain_obj(path) is not None) == plain
+    V, F = io.read_mesh(path)
+    monkeypatch.setattr(io, "_read_plain_obj", lambda p: None)
+    V2, F2 = io.read_mesh(path)
+    np.testing.assert_array_equal(V, V2)
+    np.testing.assert_array_equal(F, F2)
+    if plain:
+        np.testing.assert_array_equal(V, [[0, 0, 0], [1.5, 0, 0], [0, 1, 0], [0, 0, 1]])
+        np.testing.assert_array_equal(F, [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+
+
+def test_a_bad_vertex_line_of_an_otherwise_plain_obj_still_names_its_line(tmp_path):
+    path = tmp_path / "t.obj"
+    path.write_text(OBJ_PLAIN.replace("v 0 1 0", "v 0 one 0"))
+    with pytest.raises(sl.InputError, match="line 6 is not a vertex"):
+        io.read_mesh(path)

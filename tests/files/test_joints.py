@@ -105,3 +105,21 @@ def test_several_weighted_roots_make_a_forest():
     assert sorted(n for n in sk.names if ">" not in n) == names
     roots = {tuple(sk.joints[a]) for a, _ in sk.bones} - {tuple(sk.joints[b]) for _, b in sk.bones}
     assert roots == {(0.0, 0.0, 0.0), (3.0, 0.0, 0.0)}
+
+
+def test_depth_below_a_surface_by_the_tree_agrees_with_the_exact_signed_distance(monkeypatch):
+    import trimesh
+
+    from supportless.files import joints as joints_mod
+
+    m = trimesh.creation.icosphere(subdivisions=4, radius=2.0)
+    V, F = np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    rng = np.random.default_rng(3)
+    P = rng.normal(size=(60, 3))
+    P *= rng.uniform(0.0, 3.0, size=(60, 1)) / np.linalg.norm(P, axis=1, keepdims=True)
+    P = P[np.abs(np.linalg.norm(P, axis=1) - 2.0) > 0.05]  # clear of the surface: the sign is not in doubt
+    exact = joints_mod.depth_below(V, F)(P)
+    monkeypatch.setattr(joints_mod, "TREE_FACES", 0)
+    by_tree = joints_mod.depth_below(V, F)(P)
+    np.testing.assert_allclose(by_tree, exact, atol=1e-12)
+    np.testing.assert_allclose(exact, 2.0 - np.linalg.norm(P, axis=1), atol=0.02)  # the facets lie within 0.02

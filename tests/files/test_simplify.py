@@ -44,3 +44,52 @@ def test_poses_reduced_alike_share_their_faces_and_follow_their_pose(sphere):
     assert np.ptp(d, axis=0).max() <= np.ptp(bent, axis=0).max()
     same, H = simplify.reduced_alike([V], F, len(F))  # small enough: as it is
     assert np.array_equal(same[0], V) and np.array_equal(H, F)
+
+
+@pytest.fixture(scope="module")
+def fine_sphere():
+    m = trimesh.creation.icosphere(subdivisions=6, radius=10.0)  # 81 920 triangles
+    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+
+
+def test_a_quick_reduction_is_closed_uncrossed_and_has_no_tiny_edges(fine_sphere):
+    V, F = fine_sphere
+    U, G = simplify.quickly_reduced(V, F, 4000)
+    assert len(G) <= 4000
+    check_closed_surface(G)
+    assert len(intersecting_faces(U, G)) == 0
+    assert signed_volume(U, G) == pytest.approx(4 / 3 * np.pi * 1000, rel=0.02)  # quadric placement: on the body
+    E = np.unique(np.sort(np.concatenate([G[:, [0, 1]], G[:, [1, 2]], G[:, [2, 0]]]), axis=1), axis=0)
+    length = np.linalg.norm(U[E[:, 0]] - U[E[:, 1]], axis=1)
+    assert length.min() >= simplify.WELD_FRACTION * np.median(length)
+    assert np.allclose(np.linalg.norm(U, axis=1), 10.0, atol=0.05)
+
+
+def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_passed_over(fine_sphere, monkeypatch):
+    V, F = fine_sphere
+    monkeypatch.setattr(simplify, "FAST_FIRST_FACES", 20_000)
+    monkeypatch.setattr(simplify, "FAST_FIRST_TARGET", 8_000)
+    seen = []
+    quick = simplify.quickly_reduced
+
+    def spy(V, F, n):
+        seen.append((len(F), n))
+        return quick(V, F, n)
+
+    monkeypatch.setattr(simplify, "quickly_reduced", spy)
+    U, G = simplify.simplify_surface(V, F, 500)
+    assert seen == [(len(F), 8_000)] and len(G) <= 500
+    check_closed_surface(G)
+    assert len(intersecting_faces(U, G)) == 0
+    # the slow way: asked for, or when the quick reduction is not clean (None)
+    seen.clear()
+    U2, G2 = simplify.simplify_surface(V, F, 500, fast_first=False)
+    assert seen == [] and len(G2) <= 500
+    monkeypatch.setattr(simplify, "quickly_reduced", lambda V, F, n: seen.append(n))
+    U3, G3 = simplify.simplify_surface(V, F, 500)
+    assert seen == [8_000] and np.array_equal(G3, G2) and np.array_equal(U3, U2)
+    # a surface under the threshold is simplified the slow way, as always
+    small = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
+    seen.clear()
+    simplify.simplify_surface(np.asarray(small.vertices), np.asarray(small.faces, np.int64), 300)
+    assert seen == []

@@ -1,5 +1,6 @@
 """Rig preparation: volume mesh, bounded biharmonic weights, validation, cache, 2D rigs."""
 
+import dataclasses
 import shutil
 
 import igl
@@ -582,3 +583,70 @@ def test_an_open_surface_is_made_a_closed_solid(bad_inputs, tmp_path):
     model, kwargs, _, _ = bad_inputs["not manifold"]
     with pytest.raises(sl.InputError):
         sl.load_rig(model, up="y", cache_dir=tmp_path, **kwargs)
+
+
+# --------------------------------------------------------------------------- #
+# a sculpt: measured on its quickly reduced surface, answered at full resolution
+# --------------------------------------------------------------------------- #
+@pytest.fixture(scope="module")
+def sculpt_branch():
+    """The branch figure subdivided twice, prepared and searched as a sculpt (the thresholds of the proxy and of
+    the measuring surface lowered to its size, for the module)."""
+    from supportless.files import simplify
+
+    V, F, J, B = sl.demo_figure("branch")
+    V2, F2 = igl.upsample(V, F.astype(np.int64), 2)
+    mp = pytest.MonkeyPatch()
+    mp.setattr(rig_mod, "PROXY_FACES", len(F2) - 1)
+    mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
+    mp.setattr(simplify, "FAST_FIRST_FACES", len(F2) - 1)
+    mp.setattr(simplify, "FAST_FIRST_TARGET", len(F2) // 2)
+    try:
+        yield sl.prepare_rig(V2, F2, J, B, "y", name="sculpt")
+    finally:
+        mp.undo()
+
+
+def test_a_sculpt_is_measured_on_its_quickly_reduced_surface(sculpt_branch, dense_branch):
+    rig = sculpt_branch
+    measure = rig.measure_rig()
+    assert measure is rig.measure_rig()  # made once
+    assert len(measure.faces) <= len(rig.faces) // 2
+    sl.files.meshes.check_closed_surface(measure.faces)
+    assert len(sl.copyleft.cgal.intersecting_faces(measure.vertices, measure.faces)) == 0
+    np.testing.assert_array_equal(measure.joints, rig.joints)
+    # the same proxy and volume mesh, so the same search; weights a partition of unity
+    coarse, mine = rig.coarse_rig(), measure.coarse_rig()
+    np.testing.assert_array_equal(mine.vertices, coarse.vertices)
+    np.testing.assert_array_equal(mine.faces, coarse.faces)
+    np.testing.assert_array_equal(mine.tet_weights, coarse.tet_weights)
+    np.testing.assert_allclose(measure.weights.sum(1), 1.0, atol=1e-9)
+    # posed, it stays on the posed full surface
+    angles = np.zeros((rig.bone_count, 3))
+    angles[-1] = [0.2, 0.0, 0.7]
+    d = np.sqrt(igl.point_mesh_squared_distance(measure.pose(angles), rig.pose(angles), rig.faces)[0])
+    assert d.max() < 0.01 * np.ptp(rig.vertices, axis=0).max()
+    from supportless.files import simplify
+
+    dense = dataclasses.replace(dense_branch[0])
+    with pytest.MonkeyPatch.context() as mp:  # as many triangles as the threshold: not a sculpt
+        mp.setattr(simplify, "FAST_FIRST_FACES", len(dense.faces))
+        assert dense.measure_rig() is None
+
+
+@pytest.mark.slow
+def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolution(sculpt_branch):
+    rig = sculpt_branch
+    result = sl.optimize(rig, particles=12, iterations=4)
+    assert result.stats["measured_faces"] == len(rig.measure_rig().faces)
+    assert result.objective.rig is rig.measure_rig()
+    np.testing.assert_allclose(result.vertices, sl.base.geometry.place_on_plate(rig.pose(result.angles), rig.up))
+    assert result.print_vertices.shape == rig.vertices.shape
+    # the answer as written was checked exactly at full resolution
+    assert result.stats["written_pairs"] == len(sl.copyleft.cgal.intersecting_faces(result.print_vertices,
+                                                                                    rig.faces)) == 0
+    # the answers weighed carry the reduced surface; the slicer's copies take its faces
+    if result.choice is not None:
+        answer = result.choice.candidates[0].result
+        assert sl.search.result.faces_of(rig, answer) is rig.measure_rig().faces
+    assert sl.search.result.faces_of(rig, result) is rig.faces
