@@ -90,8 +90,33 @@ def quickly_reduced(vertices: np.ndarray, faces: np.ndarray,
     -------
     reduced : ((n', 3) float64, (f', 3) int64) or None
         Closed, manifold, outward, no two triangles crossing (CGAL's exact test); None when the reduction is
-        not all of that (the caller then simplifies the surface the slow way).
+        not all of that (the caller then simplifies the surface the slow way). The last two answers are
+        kept, by their input's digest (the proxy's reduction is the measuring surface's,
+        :meth:`supportless.rig.rig.Rig.measure_rig`).
     """
+    key = _digest(vertices, faces, max_faces)
+    if key not in _quick:
+        _quick[key] = _quickly_reduced(vertices, faces, max_faces)
+        while len(_quick) > 2:
+            _quick.pop(next(iter(_quick)))
+    return _quick[key]
+
+
+_quick: dict = {}  # the last quick reductions, by their input's digest: the proxy's serves the measuring surface
+
+
+def _digest(vertices, faces, max_faces) -> bytes:
+    import hashlib
+
+    h = hashlib.blake2b(str(max_faces).encode(), digest_size=16)
+    for a in (np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)):
+        h.update(str(a.shape).encode())
+        h.update(a.data)
+    return h.digest()
+
+
+def _quickly_reduced(vertices, faces, max_faces):
+    """:func:`quickly_reduced`, computed."""
     import fast_simplification
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components

@@ -423,6 +423,8 @@ def prepare_rig(vertices, faces, joints, bones, up="y", *, name="model", samples
         if Ws.shape != (len(V), len(B)):
             raise InputError(mesh_path, f"skin weights are {Ws.shape[0]}x{Ws.shape[1]} for {len(V)} vertices "
                              f"and {len(B)} bones")
+        if len(F) > PROXY_FACES:
+            say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
         simplified = _simplified(V, F, say) if len(F) > PROXY_FACES else None
         say("tetrahedralising")
         TV, TT, conforming = tetrahedralize_surface(*(simplified or (V, F)))
@@ -513,13 +515,20 @@ def _near_origin(V, J, tet_mesh, skinned):
     return V - centre, J, tet_mesh, -centre
 
 
-def _simplified(V, F, say, fast_first=True):
-    """The surface simplified to :data:`PROXY_TARGET` triangles, or None."""
+def _simplified(V, F, say, fast_first=True, target=None):
+    """The surface simplified to ``target`` (default :data:`PROXY_TARGET`) triangles, or None."""
     from ..files.simplify import simplify_surface
 
-    say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
-    with step(f"proxy: {len(F)} triangles simplified to {PROXY_TARGET}"):
-        return simplify_surface(V, F, PROXY_TARGET, fast_first)
+    target = PROXY_TARGET if target is None else int(target)
+    with step(f"proxy: {len(F)} triangles simplified to {target}"):
+        return simplify_surface(V, F, target, fast_first)
+
+
+#: A sculpt's proxy made the fast way that TetGen refuses with the skeleton inside is made again at these
+#: shares of :data:`PROXY_TARGET` (from the same quick reduction: seconds each) before the slow way: on the
+#: 5.35M-triangle bunny TetGen refused the proxies of 10 000 and 8 000 triangles and took those of 9 000 and
+#: 11 000, every one closed and uncrossed, the skeleton inside.
+PROXY_RETRIES = (0.9, 1.1)
 
 
 def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_path, say):
@@ -527,23 +536,25 @@ def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_pa
 
     Returns ``(Vc, Fc, TVc, TTc, Wc)``, or None when the simplified surface
     cannot be meshed or weighted (then the full surface is). A sculpt's proxy
-    made the fast way first (:func:`supportless.files.simplify.simplify_surface`)
-    is made again the slow way when it cannot be.
+    is made the fast way first (:func:`supportless.files.simplify.simplify_surface`),
+    at :data:`PROXY_RETRIES` sizes when it cannot be meshed, then the slow way.
     """
     from ..files.simplify import FAST_FIRST_FACES
     from .tetmesh import tetrahedralize_with_skeleton
 
-    for fast_first in (True, False)[: 1 + (len(F) > FAST_FIRST_FACES)]:
-        simplified = _simplified(V, F, say, fast_first)
+    say(f"simplifying the surface to {PROXY_TARGET} triangles for the volume mesh")
+    tries = [(True, PROXY_TARGET)]
+    if len(F) > FAST_FIRST_FACES:
+        tries += [(True, round(share * PROXY_TARGET)) for share in PROXY_RETRIES] + [(False, PROXY_TARGET)]
+    for fast_first, target in tries:
+        simplified = _simplified(V, F, say, fast_first, target)
         if simplified is None:
             continue
         Vc, Fc = simplified
         try:
             Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path)
-            say("tetrahedralising")
             with step("proxy: volume mesh and weights"):
                 TVc, TTc = tetrahedralize_with_skeleton(Vc, Fc, Jc, B, samples_per_bone)
-                say("computing bounded biharmonic weights")
                 Wc = compute_weights(TVc, TTc, Jc, B, bbw_iterations)
         except (InputError, RuntimeError):
             continue
