@@ -160,7 +160,9 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     Returns
     -------
     report : dict
-        Sizes, ``before``/``after`` measures (:func:`pose_measures` at the
+        Sizes (``measured_faces``: the triangles the measures were taken on, fewer than ``faces`` for a
+        sculpt, :meth:`~supportless.rig.rig.Rig.measure_rig`, whose exact pair counts are still the full
+        surface's: the rest pose's and the file's), ``before``/``after`` measures (:func:`pose_measures` at the
         printer's threshold ``result.settings.overhang_angle``), their
         ``reduction_percent``, ``predicted_slicer`` (:func:`predicted_slicer`:
         the support filament PrusaSlicer is predicted to lay down at the
@@ -180,8 +182,14 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     """
     objective, angle = result.objective, result.settings.overhang_angle
     R = np.asarray(result.rotation, np.float64)
-    before = pose_measures(objective, rig.rest_angles(), overhang_angle=angle)
-    after = pose_measures(objective, result.angles, overhang_angle=angle, rotation=R)
+    reduced = objective.rig is not rig and len(objective.rig.faces) != len(rig.faces)  # a sculpt's measures
+    before = pose_measures(objective, rig.rest_angles(), exact=not reduced, overhang_angle=angle)
+    after = pose_measures(objective, result.angles, exact=not reduced, overhang_angle=angle, rotation=R)
+    if reduced and rig.dim == 3:  # the exact counts are the full surface's: the rest pose's and the file's
+        before["intersecting_face_pairs"] = result.stats.get("rest_pairs") if "rest_pairs" in result.stats \
+            else intersecting_face_pairs(rig.vertices, rig.faces)
+        after["intersecting_face_pairs"] = result.stats.get("written_pairs") if "written_pairs" in result.stats \
+            else intersecting_face_pairs(result.print_vertices, rig.faces)
     axis, degrees = rotation_axis_angle(R)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))
@@ -192,6 +200,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "model": rig.name,
         "vertices": int(len(rig.vertices)),
         "faces": int(len(rig.faces)),
+        "measured_faces": int(len(objective.rig.faces)),
         "bones": int(rig.bone_count),
         "dimension": int(rig.dim),
         "up": rig.up.tolist(),

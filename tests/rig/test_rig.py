@@ -650,3 +650,10 @@ def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolu
         answer = result.choice.candidates[0].result
         assert sl.search.result.faces_of(rig, answer) is rig.measure_rig().faces
     assert sl.search.result.faces_of(rig, result) is rig.faces
+    # the report: measures on the reduced surface, exact counts of the full one as written
+    from supportless.report.report import build_report
+
+    report = build_report(rig, result)
+    assert report["faces"] == len(rig.faces) and report["measured_faces"] == len(rig.measure_rig().faces)
+    assert report["after"]["intersecting_face_pairs"] == result.stats["written_pairs"]
+    assert report["before"]["intersecting_face_pairs"] == result.stats["rest_pairs"] == 0
