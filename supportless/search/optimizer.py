@@ -233,11 +233,11 @@ def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_
     with step("searching on the proxy"):
         found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
                             intersects).run(t0)
-    with step("measuring the best poses on the full surface"):
+    with step(f"measuring the best poses on {len(rig.faces)} triangles"):
         chosen = on_full_surface(rig, found, full, t0)
     if not polish or chosen.interrupted:
         return chosen
-    with step("polishing on the full surface"):
+    with step(f"polishing on {len(rig.faces)} triangles"):
         polished = _PoseSearch(rig, settings.replace(polish=polish), full, chosen.angles, chosen.rotation,
                                progress(seen["iterations"], seen["iterations"]), intersects,
                                polish_only=True).run(time.perf_counter())

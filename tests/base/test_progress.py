@@ -38,6 +38,8 @@ def test_a_search_of_a_dense_rig_announces_its_full_resolution_stages(tmp_path, 
         rig = sl.prepare_rig(V, F, J, B, up="y")
         assert rig.coarse_faces is not None
         sl.optimize(rig, particles=6, iterations=2, seed=0, polish=2)
-    for name in ("weights onto the full surface", "measuring the best poses on the full surface",
+    for name in ("checking the surface and the joints", f"proxy: {len(F)} triangles simplified to 2000",
+                 "proxy: volume mesh and weights", "weights onto the full surface", "searching on the proxy",
+                 f"measuring the best poses on {len(F)} triangles", f"polishing on {len(F)} triangles",
                  "weighing the answers", "exact self-intersection check as written"):
         assert name in heard
