@@ -272,8 +272,9 @@ class Rig:
         proxy), what the search measures "on the full surface" (the best poses re-scored, the polish, the
         answers weighed and their exact checks) is measured on the surface reduced to
         :data:`~supportless.files.simplify.FAST_FIRST_TARGET` triangles
-        (:func:`~supportless.files.simplify.quickly_reduced`: closed, uncrossed), with the full surface's
-        weights at its vertices; the same joints, volume mesh and proxy. What is written is the full surface
+        (:func:`~supportless.files.simplify.quickly_reduced`: closed, uncrossed), weighted as the full
+        surface is (from the model's skin, or from the proxy's bounded biharmonic weights); the same joints,
+        volume mesh and proxy. What is written is the full surface
         posed, checked exactly there (:func:`supportless.search.result.as_written`). Made once per rig.
         """
         from ..files.simplify import FAST_FIRST_FACES
@@ -294,7 +295,10 @@ class Rig:
             if reduced is None:
                 return None
             U, G = reduced
-            W = transfer_values(U, self.vertices, self.faces, self.weights)
+            # the weights of the full surface where they come from: a skin's from the skin, bounded
+            # biharmonic weights from the proxy's surface, as the full surface's came (seconds, not tens)
+            source = self if self.info.get("weights") == "skin" else self.coarse_rig()
+            W = transfer_values(U, source.vertices, source.faces, source.weights)
             W /= np.maximum(W.sum(1, keepdims=True), 1e-300)
         n, k = len(self.vertices), len(U)
         return Rig(U, G, self.joints, self.bones, np.vstack([U, self.tet_vertices[n:]]), self.tets - n + k,
