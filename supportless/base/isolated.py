@@ -22,7 +22,7 @@ import warnings
 
 from .scratch import scratch_dir
 
-__all__ = ["NativeFailure", "run_isolated"]
+__all__ = ["NativeFailure", "run_beside", "run_isolated"]
 
 
 class NativeFailure(RuntimeError):
@@ -62,6 +62,27 @@ def run_isolated(fn, *args, what: str = "native code"):
             raise NativeFailure(f"{what} failed: {exc}") from None
     with scratch_dir("supportless-native-") as scratch:  # the parent removes it, whatever became of the child
         data, status = _fork_and_wait(fn, args, scratch)
+    return _outcome(data, status, what)
+
+
+def run_beside(fn, args: tuple, here, here_args: tuple, what: str = "native code"):
+    """``fn(*args)`` in a forked child (as :func:`run_isolated`) while ``here(*here_args)`` runs in this process:
+    both results, ``(fn's, here's)``. Two cores at work on one long native job split in two.
+
+    Raises
+    ------
+    NativeFailure
+        As :func:`run_isolated`, for the child's part (after ``here`` is done).
+    """
+    if not hasattr(os, "fork"):
+        return run_isolated(fn, *args, what=what), here(*here_args)
+    with scratch_dir("supportless-native-") as scratch:
+        data, status, mine = _fork_and_wait(fn, args, scratch, here, here_args)
+    return _outcome(data, status, what), mine
+
+
+def _outcome(data: bytes, status: int, what: str):
+    """The child's value from its pickled outcome and wait status, or :class:`NativeFailure`."""
     if os.WIFSIGNALED(status):
         sig = os.WTERMSIG(status)
         name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else f"signal {sig}"
@@ -75,8 +96,9 @@ def run_isolated(fn, *args, what: str = "native code"):
     return value
 
 
-def _fork_and_wait(fn, args, scratch):
-    """Run ``fn(*args)`` in a forked child working in ``scratch``; (its pickled outcome, its wait status)."""
+def _fork_and_wait(fn, args, scratch, here=None, here_args=()):
+    """Run ``fn(*args)`` in a forked child working in ``scratch``; (its pickled outcome, its wait status), and
+    ``here(*here_args)``'s value last when ``here`` is given (run here while the child works)."""
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
@@ -94,6 +116,7 @@ def _fork_and_wait(fn, args, scratch):
             os._exit(code)
     os.close(write_end)
     try:
+        mine = here(*here_args) if here is not None else None
         with os.fdopen(read_end, "rb") as source:
             data = source.read()
         _, status = os.waitpid(pid, 0)
@@ -104,7 +127,7 @@ def _fork_and_wait(fn, args, scratch):
         except OSError:
             pass
         raise
-    return data, status
+    return (data, status) if here is None else (data, status, mine)
 
 
 def _silence_and_run(fn, args, write_end: int, scratch) -> None:

@@ -162,17 +162,29 @@ def face_parts(vertices: np.ndarray, faces: np.ndarray, count: int) -> list[np.n
 def _detect_in_parts(V: np.ndarray, F: np.ndarray, first_only: bool) -> np.ndarray:
     """:func:`_detect` of a large surface, part by part (:func:`face_parts`): (k, 2) int64, each pair once,
     smaller face first, sorted."""
+    from ..base.isolated import run_beside
+
+    parts = face_parts(V, F, -(-len(F) // PART_FACES))  # half in a forked child, half here: two cores
+    theirs, mine = run_beside(_pairs_of_parts, (V, F, parts[1::2], first_only), _pairs_of_parts,
+                              (V, F, parts[::2], first_only), what="CGAL's self-intersection check")
+    found = mine + theirs
+    if not found:
+        return np.zeros((0, 2), np.int64)
+    return np.unique(np.concatenate(found), axis=0)
+
+
+def _pairs_of_parts(V: np.ndarray, F: np.ndarray, parts: list[np.ndarray], first_only: bool) -> list[np.ndarray]:
+    """The intersecting pairs of each part of a surface that has any, as (k, 2) face indices of the whole (with
+    ``first_only``, those CGAL found first in the first such part)."""
     found = []
-    for part in face_parts(V, F, -(-len(F) // PART_FACES)):
+    for part in parts:
         used, local = np.unique(F[part], return_inverse=True)  # shared vertices stay shared
         pairs = _cgal(np.ascontiguousarray(V[used]), local.reshape(-1, 3).astype(np.int64), first_only)
         if len(pairs):
             found.append(np.sort(part[pairs], axis=1))
             if first_only:
                 break
-    if not found:
-        return np.zeros((0, 2), np.int64)
-    return np.unique(np.concatenate(found), axis=0)
+    return found
 
 
 def self_union(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -256,12 +256,14 @@ def merge_duplicate_vertices(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, 
     """
     used = np.zeros(len(V), bool)
     used[F.ravel()] = True
-    _, first, inverse = np.unique(V, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
-    if len(first) == len(V) and used.all():
+    order = np.lexsort(V.T[::-1])  # by x, then y, then z; stable, so each run of equal rows starts at its first
+    ordered = V[order]
+    starts = np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)]
+    if starts.all() and used.all():
         return V, F
     # canonical representative: the first occurrence of each position
-    rep = first[inverse]
+    rep = np.empty(len(V), np.int64)
+    rep[order] = order[starts][np.cumsum(starts) - 1]
     F = rep[F]
     keep = np.zeros(len(V), bool)
     keep[F.ravel()] = True
@@ -397,8 +399,9 @@ def check_not_flat(V: np.ndarray, F: np.ndarray, path: str | os.PathLike | None 
         is flat (no volume)`` when a closed surface encloses no volume, or a
         planar mesh covers no area (a closed surface squashed onto z = 0).
     """
-    used = V[np.unique(F)]
-    size = float(np.ptp(used, axis=0).max())
+    mask = np.zeros(len(V), bool)
+    mask[np.asarray(F).ravel()] = True
+    size = float(np.ptp(V[mask], axis=0).max())
     if not size > 0:
         raise InputError(path, "the mesh has no size: all its vertices are at one point; export it again")
     corners = V[F]

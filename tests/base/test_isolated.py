@@ -8,7 +8,7 @@ import signal
 import numpy as np
 import pytest
 
-from supportless.base.isolated import NativeFailure, run_isolated
+from supportless.base.isolated import NativeFailure, run_beside, run_isolated
 
 
 def _double(a):
@@ -64,3 +64,17 @@ def test_files_the_child_writes_stay_in_its_scratch_folder(tmp_path, monkeypatch
     monkeypatch.chdir(tmp_path)
     assert run_isolated(_write_a_file, "tetgen-tmpfile_skipped.node")
     assert list(tmp_path.iterdir()) == []
+
+
+def _pid_and_double(a):
+    return os.getpid(), 2 * a
+
+
+def test_run_beside_runs_one_call_in_a_child_and_one_here_and_returns_both():
+    (theirs_pid, theirs), (mine_pid, mine) = run_beside(_pid_and_double, (np.arange(3),), _pid_and_double,
+                                                        (np.arange(4),))
+    assert theirs_pid != os.getpid() and mine_pid == os.getpid()
+    np.testing.assert_array_equal(theirs, [0, 2, 4])
+    np.testing.assert_array_equal(mine, [0, 2, 4, 6])
+    with pytest.raises(NativeFailure, match="crashed"):  # the child's crash is the one failure, after here's part
+        run_beside(_segfault, (), _double, (np.arange(2),), what="the slab check")
