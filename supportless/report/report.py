@@ -9,6 +9,7 @@ a search's pose side by side as the JSON report of ``optimize``;
 from __future__ import annotations
 
 import copy
+import dataclasses
 import datetime as _dt
 import os
 import platform
@@ -195,7 +196,12 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     height = float(np.ptp(rig.vertices @ rig.up))
     turned = np.degrees(objective.prior.angles(result.angles))
     frame = rig_print_frame(rig) if frame is None else frame
-    predicted = predicted_slicer(rig, result, frame.height_mm)
+    if reduced:  # a sculpt's predicted support on the surface its answers were weighed on
+        posed = place_on_plate(objective.rig.pose(result.angles), rig.up)
+        predicted = predicted_slicer(objective.rig, dataclasses.replace(result, print_vertices=print_pose(
+            posed, R, rig.up)), frame.height_mm)
+    else:
+        predicted = predicted_slicer(rig, result, frame.height_mm)
     report = {
         "model": rig.name,
         "vertices": int(len(rig.vertices)),

@@ -657,3 +657,9 @@ def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolu
     assert report["faces"] == len(rig.faces) and report["measured_faces"] == len(rig.measure_rig().faces)
     assert report["after"]["intersecting_face_pairs"] == result.stats["written_pairs"]
     assert report["before"]["intersecting_face_pairs"] == result.stats["rest_pairs"] == 0
+    # its predicted support, taken on the reduced surface, is the full surface's within the model's noise
+    from supportless.report.report import predicted_slicer
+
+    full = predicted_slicer(rig, result, report["predicted_slicer"]["height_mm"])
+    for key in ("before_mm", "after_mm"):
+        assert report["predicted_slicer"][key] == pytest.approx(full[key], rel=0.05, abs=1.0)
