@@ -216,6 +216,39 @@ def at_full_resolution(rig: Rig, result: PoseResult) -> PoseResult:
                                print_vertices=print_pose(posed, result.rotation, rig.up) if turned else posed)
 
 
+#: When the chosen answer crosses itself as written (a sculpt's, weighed on its reduced surface), this many of
+#: the other answers weighed are checked at full resolution, the best predicted (or sliced) first, before the
+#: rest pose is written instead.
+NEXT_ANSWERS = 3
+
+
+def _next_clear_answer(rig: Rig, result: PoseResult, rest_pairs: int) -> PoseResult | None:
+    """The best of ``result.choice``'s other answers whose file crosses itself no more than the rest pose's
+    (:data:`NEXT_ANSWERS` at most, by the slicer's support when it chose, else the predicted), or None."""
+    choice = result.choice
+    if choice is None:
+        return None
+    sliced = choice.by == "slicer"
+
+    def support(c):
+        return c.sliced_mm if sliced else c.predicted_mm
+
+    others = sorted((i for i, c in enumerate(choice.candidates) if i != choice.chosen and support(c) is not None),
+                    key=lambda i: support(choice.candidates[i]))
+    for i in others[:NEXT_ANSWERS]:
+        answer = at_full_resolution(rig, choice.candidates[i].result)
+        written = len(intersecting_faces(answer.print_vertices, rig.faces))
+        if written <= rest_pairs:
+            why = (f"{choice.reason}; #{choice.chosen + 1} crossed itself at full resolution as written, "
+                   f"so #{i + 1}")
+            return dataclasses.replace(answer, choice=dataclasses.replace(choice, chosen=i, reason=why),
+                                       symmetry=result.symmetry, interrupted=result.interrupted,
+                                       stats=dict(answer.stats, written_pairs=written, rest_pairs=rest_pairs,
+                                                  chosen_kind=choice.candidates[i].kind,
+                                                  passed_over_as_written=choice.chosen + 1))
+    return None
+
+
 def faces_of(rig: Rig, result: PoseResult) -> np.ndarray:
     """(f, 3) int64: the triangles of ``result``'s surfaces: ``rig``'s, or those of the surface it was
     measured on when that is not ``rig``'s (an answer a sculpt's choice weighed, :meth:`Rig.measure_rig`)."""
@@ -244,7 +277,9 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     Returns
     -------
     result : PoseResult
-        ``stats`` gains ``written_pairs`` and ``rest_pairs``; when the rest
+        When it crosses itself more than the rest pose and was chosen among answers, the best of the other
+        answers that does not (:data:`NEXT_ANSWERS` tried; ``stats["passed_over_as_written"]`` names the
+        answer passed over). ``stats`` gains ``written_pairs`` and ``rest_pairs``; when the rest
         pose replaced the result, ``fell_back_to_rest`` (the pairs the found
         pose had) as well.
     """
@@ -255,6 +290,8 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     written = len(intersecting_faces(result.print_vertices, rig.faces))
     if written <= rest_pairs:
         return dataclasses.replace(result, stats=dict(result.stats, written_pairs=written, rest_pairs=rest_pairs))
+    if (other := _next_clear_answer(rig, result, rest_pairs)) is not None:
+        return other
     rest = np.zeros_like(result.angles)
     turned = measured_at(rig, result, rest, result.rotation)
     upright = measured_at(rig, result, rest, np.eye(rig.dim))
