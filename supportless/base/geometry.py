@@ -11,7 +11,7 @@ import numpy as np
 from .errors import InputError
 
 __all__ = ["parse_up", "place_on_plate", "plane_basis", "points_in_triangles", "print_pose", "print_transform",
-           "signed_volume"]
+           "signed_volume", "surface_digest"]
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -193,3 +193,24 @@ def plane_basis(up):
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(up, e1)
     return np.stack([e1, e2])
+
+
+def surface_digest(vertices: np.ndarray, faces: np.ndarray) -> bytes:
+    """16 bytes that change with any bit of a surface: the key of answers remembered per surface.
+
+    Parameters
+    ----------
+    vertices : (n, d) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    digest : bytes
+    """
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    for a in (np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)):
+        h.update(str(a.shape).encode())
+        h.update(memoryview(a).cast("B"))
+    return h.digest()

@@ -61,7 +61,7 @@ def run_isolated(fn, *args, what: str = "native code"):
         except Exception as exc:  # the same contract as the child's
             raise NativeFailure(f"{what} failed: {exc}") from None
     with scratch_dir("supportless-native-") as scratch:  # the parent removes it, whatever became of the child
-        data, status = _fork_and_wait(fn, args, scratch)
+        data, status, _ = _fork_and_wait(fn, args, scratch)
     return _outcome(data, status, what)
 
 
@@ -97,8 +97,8 @@ def _outcome(data: bytes, status: int, what: str):
 
 
 def _fork_and_wait(fn, args, scratch, here=None, here_args=()):
-    """Run ``fn(*args)`` in a forked child working in ``scratch``; (its pickled outcome, its wait status), and
-    ``here(*here_args)``'s value last when ``here`` is given (run here while the child works)."""
+    """Run ``fn(*args)`` in a forked child working in ``scratch``, and ``here(*here_args)`` here meanwhile
+    when ``here`` is given: (the child's pickled outcome, its wait status, here's value or None)."""
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
@@ -127,7 +127,7 @@ def _fork_and_wait(fn, args, scratch, here=None, here_args=()):
         except OSError:
             pass
         raise
-    return (data, status) if here is None else (data, status, mine)
+    return data, status, mine
 
 
 def _silence_and_run(fn, args, write_end: int, scratch) -> None:

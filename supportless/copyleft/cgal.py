@@ -10,10 +10,11 @@ code inside libigl's wheel).
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
+
+from ..base.geometry import surface_digest
 
 __all__ = ["PART_FACES", "face_parts", "intersecting_faces", "intersecting_face_pairs", "self_intersects",
            "self_union"]
@@ -100,7 +101,7 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
     F = np.ascontiguousarray(faces, np.int64)
     if len(F) <= PART_FACES:
         return _cgal(V, F, first_only)
-    key = _digest(V, F)
+    key = surface_digest(V, F)
     known = _answers.setdefault(key, {})  # "all": every pair, "first": the first-only answer
     _answers.move_to_end(key)
     while len(_answers) > REMEMBERED:
@@ -112,14 +113,6 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
     pairs = _detect_in_parts(V, F, first_only)
     known["first" if first_only else "all"] = pairs
     return pairs
-
-
-def _digest(V: np.ndarray, F: np.ndarray) -> bytes:
-    h = hashlib.blake2b(digest_size=16)
-    for a in (V, F):
-        h.update(str(a.shape).encode())
-        h.update(memoryview(a).cast("B"))
-    return h.digest()
 
 
 def _cgal(V: np.ndarray, F: np.ndarray, first_only: bool) -> np.ndarray:

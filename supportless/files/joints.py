@@ -16,7 +16,8 @@ import numpy as np
 from ..base.errors import InputError
 from ..base.geometry import parse_up
 
-__all__ = ["JOINT_INSIDE_MARGIN", "JOINT_OUTSIDE_TOLERANCE", "RigSkeleton", "TREE_FACES", "depth_below", "joint_order", "pull_joints_inside",
+__all__ = ["JOINT_INSIDE_MARGIN", "JOINT_OUTSIDE_TOLERANCE", "RigSkeleton", "TREE_FACES", "depth_below", "joint_order",
+           "pull_joints_inside",
            "skeleton_from_joints"]
 
 #: A joint outside the surface by at most this fraction of the model's height is

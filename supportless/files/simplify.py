@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.errors import InputError
-from ..base.geometry import signed_volume
+from ..base.geometry import signed_volume, surface_digest
 
 __all__ = ["FAST_FIRST_FACES", "FAST_FIRST_TARGET", "SLICE_FACES", "quickly_reduced", "reduced_alike",
            "simplify_surface"]
@@ -94,7 +94,7 @@ def quickly_reduced(vertices: np.ndarray, faces: np.ndarray,
         kept, by their input's digest (the proxy's reduction is the measuring surface's,
         :meth:`supportless.rig.rig.Rig.measure_rig`).
     """
-    key = _digest(vertices, faces, max_faces)
+    key = (surface_digest(vertices, faces), int(max_faces))
     if key not in _quick:
         _quick[key] = _quickly_reduced(vertices, faces, max_faces)
         while len(_quick) > 2:
@@ -105,16 +105,6 @@ def quickly_reduced(vertices: np.ndarray, faces: np.ndarray,
 _quick: dict = {}  # the last quick reductions, by their input's digest: the proxy's serves the measuring surface
 
 
-def _digest(vertices, faces, max_faces) -> bytes:
-    import hashlib
-
-    h = hashlib.blake2b(str(max_faces).encode(), digest_size=16)
-    for a in (np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64)):
-        h.update(str(a.shape).encode())
-        h.update(a.data)
-    return h.digest()
-
-
 def _quickly_reduced(vertices, faces, max_faces):
     """:func:`quickly_reduced`, computed."""
     import fast_simplification
@@ -122,12 +112,12 @@ def _quickly_reduced(vertices, faces, max_faces):
     from scipy.sparse.csgraph import connected_components
 
     from ..copyleft.cgal import self_intersects
-    from .meshes import check_closed_surface
+    from .meshes import check_closed_surface, edge_counts
 
     U, G = fast_simplification.simplify(np.asarray(vertices, np.float32), np.asarray(faces, np.int32),
                                         target_count=int(max_faces))
     U, G = np.asarray(U, np.float64), np.asarray(G, np.int64)
-    E = np.unique(np.sort(np.concatenate([G[:, [0, 1]], G[:, [1, 2]], G[:, [2, 0]]]), axis=1), axis=0)
+    E, _ = edge_counts(G)
     length = np.linalg.norm(U[E[:, 0]] - U[E[:, 1]], axis=1)
     short = E[length < WELD_FRACTION * np.median(length)]
     graph = coo_matrix((np.ones(len(short)), (short[:, 0], short[:, 1])), shape=(len(U), len(U)))

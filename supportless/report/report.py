@@ -187,10 +187,10 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     before = pose_measures(objective, rig.rest_angles(), exact=not reduced, overhang_angle=angle)
     after = pose_measures(objective, result.angles, exact=not reduced, overhang_angle=angle, rotation=R)
     if reduced and rig.dim == 3:  # the exact counts are the full surface's: the rest pose's and the file's
-        before["intersecting_face_pairs"] = result.stats.get("rest_pairs") if "rest_pairs" in result.stats \
-            else intersecting_face_pairs(rig.vertices, rig.faces)
-        after["intersecting_face_pairs"] = result.stats.get("written_pairs") if "written_pairs" in result.stats \
-            else intersecting_face_pairs(result.print_vertices, rig.faces)
+        for measures, key, V in ((before, "rest_pairs", rig.vertices), (after, "written_pairs", result.print_vertices)):
+            measures["intersecting_face_pairs"] = result.stats.get(key, None)
+            if measures["intersecting_face_pairs"] is None:
+                measures["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
     axis, degrees = rotation_axis_angle(R)
     displacement = np.linalg.norm(rig.pose(result.angles) - rig.vertices, axis=1)
     height = float(np.ptp(rig.vertices @ rig.up))

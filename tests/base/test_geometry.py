@@ -70,3 +70,16 @@ def test_print_pose_is_a_rigid_turn_onto_the_plate():
     moved = (V - centre) @ R.T + centre
     np.testing.assert_allclose(P - moved, np.outer(np.ones(len(V)), (P - moved)[0]), atol=1e-12)
     assert abs((P - moved)[0] @ [1, 0, 0]) < 1e-12 and abs((P - moved)[0] @ [0, 0, 1]) < 1e-12
+
+
+def test_a_surface_digest_changes_with_any_bit_and_only_then():
+    from supportless.base.geometry import surface_digest
+
+    V = np.random.default_rng(0).random((10, 3))
+    F = np.array([[0, 1, 2], [2, 3, 4]])
+    assert surface_digest(V, F) == surface_digest(V.copy(), F.copy())
+    W = V.copy()
+    W[3, 1] = np.nextafter(W[3, 1], 2.0)  # one bit
+    assert surface_digest(W, F) != surface_digest(V, F)
+    assert surface_digest(V, F[:, ::-1]) != surface_digest(V, F)
+    assert surface_digest(V[:9], F) != surface_digest(V, F)

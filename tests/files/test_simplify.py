@@ -13,10 +13,15 @@ from supportless.files import simplify
 from supportless.files.meshes import check_closed_surface
 
 
+def icosphere(subdivisions: int):
+    """(V, F) of a sphere of radius 10: 20 480 triangles at 5 subdivisions, 81 920 at 6."""
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=10.0)
+    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+
+
 @pytest.fixture
 def sphere():
-    m = trimesh.creation.icosphere(subdivisions=5, radius=10.0)  # 20 480 triangles
-    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    return icosphere(5)
 
 
 def test_a_closed_surface_is_simplified_closed_and_uncrossed(sphere):
@@ -48,8 +53,7 @@ def test_poses_reduced_alike_share_their_faces_and_follow_their_pose(sphere):
 
 @pytest.fixture(scope="module")
 def fine_sphere():
-    m = trimesh.creation.icosphere(subdivisions=6, radius=10.0)  # 81 920 triangles
-    return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    return icosphere(6)
 
 
 def test_a_quick_reduction_is_closed_uncrossed_and_has_no_tiny_edges(fine_sphere):
@@ -89,7 +93,6 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
     U3, G3 = simplify.simplify_surface(V, F, 500)
     assert seen == [8_000] and np.array_equal(G3, G2) and np.array_equal(U3, U2)
     # a surface under the threshold is simplified the slow way, as always
-    small = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
     seen.clear()
-    simplify.simplify_surface(np.asarray(small.vertices), np.asarray(small.faces, np.int64), 300)
+    simplify.simplify_surface(*icosphere(4), 300)
     assert seen == []
