@@ -28,7 +28,7 @@ from .cli_common import (
     EXIT_MISSING_TOOL,
     EXIT_WRITE_FAILED,
     UP_HELP,
-    _console,
+    _console, _contact_line,
     _fail,
     _Group,
     _load,
@@ -395,6 +395,7 @@ def _print_results(console, report, verbose=False):
     if headline:
         console.print(headline["line"])
     console.print(_summary_table(report, verbose))
+    console.print(_contact_line(report))
     console.print(f"search took {report['runtime_seconds']:.1f} s")
 
 

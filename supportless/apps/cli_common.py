@@ -191,6 +191,10 @@ def _search_options(f):
                      help="Largest turn of a chain's end (a head, a hand, a tail tip) from its rest direction, "
                           "degrees: a limit on the whole chain, where --joint-limit bounds each joint alone "
                           "(180: none)."),
+        click.option("--head-limit", type=click.FloatRange(*RANGES["head_limit"]), default=d.head_limit,
+                     show_default=True,
+                     help="Largest turn of a head from its rest direction, degrees (the chest, neck and head "
+                          "together): tighter than --chain-limit, a face is read first (180: none)."),
         click.option("--w-chain", type=click.FloatRange(*RANGES["w_chain"]), default=d.w_chain, show_default=True,
                      help="Weight, inside the natural-pose prior, of how far the chains' ends turn in the world "
                           "(three joints turning one way cost more than three turning different ways)."),
@@ -202,6 +206,10 @@ def _search_options(f):
         click.option("--anatomy/--no-anatomy", default=d.anatomy, show_default=True,
                      help="Keep the joints the bone names identify (knees, elbows, spine, neck of a Mixamo, VRM, "
                           "Unreal or Blender rig) within their range of motion; other bones keep --joint-limit."),
+        click.option("--contact/--no-contact", default=d.contact, show_default=True,
+                     help="Let a part press into the part it is jointed to, near their shared joint (an arm "
+                          "resting against the torso, thighs together); the written body is then one solid, "
+                          "the posed surface united with itself. --no-contact: refuse any crossing."),
         click.option("--keep-standing/--no-keep-standing", default=d.keep_standing, show_default=True,
                      help="Reject poses that touch the plate with a new part or would fall over."),
         click.option("--symmetric/--no-symmetric", default=d.symmetric,
@@ -292,3 +300,16 @@ def _require_slicer(option: str, choice=None) -> None:
         who = "PrusaSlicer" if choice is None or choice.engine == "prusa" else "Cura"
         click.echo(f"supportless: error: {option} needs {who}: {missing}", err=True)
         sys.exit(EXIT_MISSING_TOOL)
+
+
+def _contact_line(report: dict) -> str:
+    """One line: the skinning that posed the answer, and its contacts merged as written."""
+    contacts = report.get("contacts") or []
+    line = f"posed by {report.get('skinning', 'linear blend skinning')}"
+    between = sorted((c for c in contacts if c["parts"][0] != c["parts"][1]), key=lambda c: -c["pairs"])
+    if contacts:
+        named = [f"{c['parts'][0].split(':')[-1]} with {c['parts'][1].split(':')[-1]}" for c in between[:4]]
+        more = len(between) - len(named)
+        line += (f"; {contacts[0]['overlap_mm3']:,.0f} mm³ of contact merged into one solid as written ("
+                 + ", ".join(named) + (f" and {more} more" if more > 0 else "") + ")")
+    return line

@@ -33,7 +33,7 @@ from ..base.isolated import NativeFailure
 from ..copyleft.cgal import intersecting_faces, self_union
 from .simplify import simplify_surface
 
-__all__ = ["BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body",
+__all__ = ["united_surface", "BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body",
            "transfer_values"]
 
 #: Closed shells below this fraction of the total volume are dropped (slivers,
@@ -325,7 +325,46 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
     return PrintBody(Vu, Fu, Wu, islands, log)
 
 
-def _resolve_crossings(V, F, values, tol, log):
+def united_surface(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+    """One closed solid from a surface that presses into itself: its exact self-union (CGAL), else the surface
+    of its winding number (as :func:`print_body`'s last step).
+
+    A posed figure whose arm rests against its torso crosses itself there; what is printed is the solid the
+    two parts make together.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+        Closed, outward oriented.
+
+    Returns
+    -------
+    vertices : (n', 3) float64
+    faces : (f', 3) int64
+        The input when it does not cross itself.
+    merged : dict
+        ``pairs`` (crossing triangle pairs before), ``volume_before`` (the surface's enclosed volume, overlaps
+        counted twice), ``volume`` (the solid's), ``merged_volume`` (their difference: the volume two parts
+        shared), ``how`` ("none", "exact self-union" or "winding-number surface") and ``note`` (one line).
+    """
+    V, F = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
+    size = float(np.ptp(V, axis=0).max()) if len(V) else 1.0
+    pairs = len(intersecting_faces(V, F))
+    before = _volume(V, F)
+    log: list[str] = []
+    Vx, Fx, _ = _resolve_crossings(V, F, np.zeros((len(V), 0)), SIMPLIFY_TOLERANCE * size, log, pairs)
+    if pairs and len(intersecting_faces(Vx.astype(np.float32).astype(np.float64), Fx)):  # as an STL stores it
+        Vx, Fx = winding_surface(V, F, WINDING_CELLS)
+        log = [f"{pairs} pairs of crossing triangles: the exact self-union crosses itself once stored in single "
+               f"precision, so the body is the surface of its winding number on a {WINDING_CELLS}-cell grid"]
+    after = _volume(Vx, Fx)
+    how = "none" if not pairs else ("exact self-union" if "exact self-union" in log[0] else "winding-number surface")
+    return Vx, Fx, {"pairs": pairs, "volume_before": before, "volume": after, "merged_volume": before - after,
+                    "how": how, "note": log[0] if log else ""}
+
+
+def _resolve_crossings(V, F, values, tol, log, before=None):
     """Remove crossing triangles: CGAL's exact self-union, else the winding-number surface.
 
     The self-union keeps every detail; the slivers it leaves are collapsed
@@ -336,9 +375,9 @@ def _resolve_crossings(V, F, values, tol, log):
     closed, free of crossings, true to a grid cell of :data:`WINDING_CELLS`.
     Returns the surface and its values (carried from the surface before by
     closest point); ``log`` gets a line when there were crossings, and says
-    how many remain.
+    how many remain. ``before``: the crossing pairs, when counted already.
     """
-    before = len(intersecting_faces(V, F))
+    before = len(intersecting_faces(V, F)) if before is None else before
     if before == 0:
         return V, F, values
     try:

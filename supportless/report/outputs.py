@@ -16,6 +16,7 @@ import numpy as np
 from ..base.progress import step
 from ..files.gltf import is_gltf, posed_joint_transforms, write_posed_gltf
 from ..files.meshes import write_json, write_mesh
+from ..files.printbody import united_surface
 from ..files.posefile import write_pose
 from ..files.printframe import PrintFrame
 from .report import write_pictures
@@ -55,8 +56,14 @@ def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.n
         write_posed_gltf(source["path"], path, T, np.asarray(source["joint_nodes"]))
         return "glTF asset, standing (its skin posed)"
     placed = frame.to_gltf(vertices) if is_gltf(path) and rig.dim == 3 else frame.place(vertices)
-    write_mesh(path, placed, rig.faces)
-    return "mesh, as printed" if vertices is not standing else "mesh"
+    faces = rig.faces
+    united = ""
+    if rig.dim == 3:  # parts pressed together (an arm resting on the torso) print as one solid
+        placed, faces, merged = united_surface(placed, faces)
+        if merged["pairs"]:
+            united = f", one solid ({merged['how']}: {merged['pairs']} crossing pairs merged)"
+    write_mesh(path, placed, faces)
+    return ("mesh, as printed" if vertices is not standing else "mesh") + united
 
 
 def pictures_step(folder, rig, result, report) -> list[tuple[str, str]]:

@@ -251,8 +251,39 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "created": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
     }
+    report["contacts"] = contact_summary(rig, result, frame)
+    report["skinning"] = skinning_label(rig)
     report["support"] = support_headline(report)
     return report
+
+
+def skinning_label(rig) -> str:
+    """Which weights and blend posed the result, in words."""
+    skin = rig.info.get("weights") == "skin" or ("gltf" in rig.info and rig.info.get("weights", "skin") == "skin")
+    source = "the glTF file's skin weights" if skin else "bounded biharmonic weights"
+    return f"linear blend skinning with {source}"
+
+
+def contact_summary(rig, result, frame: PrintFrame) -> list[dict]:
+    """The contact regions of the answer as written (:func:`supportless.search.result.written_verdict`'s), named.
+
+    Returns
+    -------
+    contacts : list of dict
+        One per pair of parts pressed together: ``parts`` (two bone names), ``pairs`` (crossing triangle
+        pairs), ``depth`` (deepest press, in the thinner part's thicknesses) and ``overlap_mm3`` (the volume
+        the whole body covers twice, at the print's scale, on the first only; the written file merges it).
+    """
+    regions = result.stats.get("contacts") or []
+    if not regions or rig.dim != 3:
+        return []
+    from ..energies.intersection import self_intersection_volume
+
+    names = rig.bone_names()
+    overlap = float(self_intersection_volume(result.print_vertices, rig.faces, rig.up)) * frame.scale ** 3
+    return [{"parts": [names[r["bones"][0]], names[r["bones"][1]]], "pairs": int(r["pairs"]),
+             "depth": round(float(r["depth"]), 3), "overlap_mm3": round(overlap, 1) if i == 0 else None}
+            for i, r in enumerate(regions)]
 
 
 def support_headline(report: dict) -> dict | None:

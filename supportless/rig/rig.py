@@ -27,6 +27,7 @@ from ..files.repair import repair_degenerate_faces, repair_note
 from ..files.skeleton import check_skeleton
 from .balance import centre_of_mass_operator
 from .cache import default_cache_dir, rig_cache_key
+from .contact import BodyParts, ContactRules, ContactVerdict, contact_verdict
 from .weights import BBW_ITERATIONS, check_weights, compute_weights
 
 __all__ = ["Rig", "compute_weights", "default_cache_dir", "prepare_rig", "rig_cache_key"]
@@ -246,6 +247,49 @@ class Rig:
         measure its overlaps, and CGAL's check is of triangle meshes in space.
         """
         return self.dim == 3 and self_intersects(self.pose(angles), self.faces)
+
+    @cached_property
+    def body_parts(self) -> BodyParts:
+        """The surface split into bone regions, for :meth:`crossings` (:class:`~supportless.rig.contact.BodyParts`)."""
+        return BodyParts(self.vertices, self.faces, self.weights, self.joints, self.bones, self.bone_names())
+
+    @cached_property
+    def rest_volume(self) -> float:
+        """The rest surface's enclosed volume (area in 2D), model units."""
+        return abs(float(signed_volume(self.vertices, self.faces)))
+
+    def crossings(self, vertices: np.ndarray, posed_joints: np.ndarray, rules: ContactRules | None = None,
+                  overlap_volume: float | None = None, first_only: bool = False) -> ContactVerdict:
+        """Whether a posed surface's crossings are all contact between jointed parts (:mod:`~supportless.rig.contact`).
+
+        Parameters
+        ----------
+        vertices : (n, 3) float64
+            This rig's surface, posed (in any rigid placement).
+        posed_joints : (j, 3) float64
+            Its joints, placed alike.
+        rules : ContactRules, optional
+            None: no contact allowed (any crossing refuses the pose).
+        overlap_volume : float, optional
+            The volume it covers twice (the ray grid's), bounded by ``rules.volume`` of :attr:`rest_volume`.
+        first_only : bool
+            With no contact allowed, stop at the first crossing (the verdict's ``pairs`` is then 0 or 1).
+
+        Returns
+        -------
+        verdict : ContactVerdict
+            Allowed (and every pair 2D) for a planar figure.
+        """
+        if self.dim != 3:
+            return ContactVerdict(True, 0)
+        rules = rules if rules is not None else ContactRules(hops=-1)
+        if not rules.allows_contact and first_only:
+            crossing = self_intersects(vertices, self.faces)
+            return ContactVerdict(not crossing, int(crossing), "the surface crosses itself" if crossing else "")
+        from ..copyleft.cgal import intersecting_faces
+
+        return contact_verdict(self.body_parts, vertices, posed_joints, intersecting_faces(vertices, self.faces),
+                               rules, overlap_volume, self.rest_volume)
 
     def posed_joints(self, angles: np.ndarray) -> np.ndarray:
         """Joint positions of a batch of poses, (P, j, d) or (j, d) float64."""

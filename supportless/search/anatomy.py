@@ -3,7 +3,9 @@
 A rig whose bones have names (a glTF character: Mixamo ``mixamorig:LeftLeg``,
 VRM ``leftLowerLeg``, VRoid ``J_Bip_L_LowerLeg``, Unreal ``calf_l``, Blender
 and Rigify ``shin.L`` / ``DEF-shin.L``, Quaternius ``LowerLeg.L`` and
-``FrontLowerLeg.L``) says which bone is a thigh, a shin, a forearm. Such a
+``FrontLowerLeg.L``) says which bone is a thigh, a shin, a forearm, a neck, a
+head (VRoid's centre bones ``J_Bip_C_Head``, Rigify's ``DEF-spine.004`` to
+``.006``: neck and head, :func:`bone_parts`). Such a
 bone's joint then gets the range of the joint it names
 (:data:`HUMANOID_TABLE`, :data:`QUADRUPED_TABLE`), on top of the generic per-joint
 limit every bone has:
@@ -39,7 +41,8 @@ from scipy.spatial.transform import Rotation
 
 from ..rig.rig import Rig
 
-__all__ = ["HUMANOID_TABLE", "QUADRUPED_TABLE", "JointRange", "JointRanges", "bone_part", "joint_ranges"]
+__all__ = ["HUMANOID_TABLE", "QUADRUPED_TABLE", "JointRange", "JointRanges", "bone_part", "bone_parts",
+           "joint_ranges"]
 
 
 @dataclass(frozen=True)
@@ -97,7 +100,7 @@ QUADRUPED_TABLE = {
 
 #: The part each kind of joint hangs from (the bone its range is measured against).
 _PARENT_PARTS = {
-    "spine": ("hips", "spine"), "neck": ("spine", "neck"), "head": ("neck",),
+    "spine": ("hips", "spine"), "neck": ("spine", "neck"), "head": ("neck", "spine"),
     "shoulder": ("spine",), "upper_arm": ("shoulder", "spine"), "forearm": ("upper_arm",), "hand": ("forearm",),
     "thigh": ("hips", "spine"), "shin": ("thigh",), "foot": ("shin",), "toe": ("foot",),
     "upper_leg": ("shoulder", "hips", "spine", "upper_leg"), "lower_leg": ("upper_leg",), "paw": ("lower_leg",),
@@ -108,7 +111,7 @@ _STEMS = {
     "hips": "hips", "pelvis": "hips", "root": None,
     "spine": "spine", "chest": "spine", "upperchest": "spine", "abdomen": "spine", "torso": "spine",
     "waist": "spine", "belly": "spine", "back": "spine", "shoulders": "spine",
-    "neck": "neck", "head": "head",
+    "neck": "neck", "necktwist": "neck", "necklower": "neck", "neckupper": "neck", "head": "head",
     "shoulder": "shoulder", "clavicle": "shoulder", "collar": "shoulder",
     "arm": "upper_arm", "upperarm": "upper_arm", "uparm": "upper_arm",
     "forearm": "forearm", "lowerarm": "forearm",
@@ -164,6 +167,7 @@ def bone_part(name: str) -> tuple[str | None, str | None, str | None, str]:
         if low.startswith(prefix):
             text, low = text[len(prefix):], low[len(prefix):]
     text = re.sub(r"[._]\d+$", "", text)  # Blender's .001, an exporter's _06
+    text = re.sub(r"(?i)^c[._ ](?=[a-z])", "", text)  # VRoid's centre bones: J_Bip_C_Head
     side = None
     match = re.search(r"(?i)[._ ]([lr])$", text) or re.search(r"(?i)^([lr])[._ ]", text)
     if match:
@@ -197,6 +201,47 @@ def bone_part(name: str) -> tuple[str | None, str | None, str | None, str]:
                 "lower_leg", "paw") and side is None:
         part = None  # a limb without a side is not one the tables can place
     return part, side, group, convention or "plain"
+
+
+#: Rigify's deforming spine (``DEF-spine`` to ``DEF-spine.006`` of its human metarig): the last three are the
+#: neck (``.004``, ``.005``) and the head (``.006``).
+_RIGIFY_SPINE = re.compile(r"(?i)^(?:def-|org-)?spine\.(\d{3})$")
+
+
+def bone_parts(labels: list) -> list[tuple]:
+    """What each of a rig's bone names says it is.
+
+    Parameters
+    ----------
+    labels : list of str
+        The rig's bone names (:attr:`supportless.rig.rig.Rig.labels`).
+
+    Returns
+    -------
+    parts : list of tuple
+        :func:`bone_part` of each bone's own name (a bone ``"A>B"`` between two
+        joints is ``A``'s when no other bone is), except Rigify's numbered spine:
+        in a rig whose spine ends at ``spine.006`` and whose names say no neck
+        or head, ``spine.004`` and ``spine.005`` are the neck and ``spine.006``
+        the head.
+
+    Examples
+    --------
+    >>> [p[0] for p in bone_parts(["DEF-spine", "DEF-spine.003", "DEF-spine.004", "DEF-spine.006"])]
+    ['spine', 'spine', 'neck', 'head']
+    """
+    own = [_own_name(name, labels) for name in labels]
+    parsed = [bone_part(name) for name in own]
+    numbers = {}
+    for b, name in enumerate(own):
+        match = _RIGIFY_SPINE.match(name.split(":")[-1].split("|")[-1].strip())
+        if match:
+            numbers[b] = int(match.group(1))
+    if numbers and max(numbers.values()) == 6 and not any(p[0] in ("neck", "head") for p in parsed):
+        for b, n in numbers.items():
+            if n >= 4:
+                parsed[b] = ("neck" if n < 6 else "head", None, None, "Rigify")
+    return parsed
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -362,7 +407,7 @@ def joint_ranges(rig: Rig) -> JointRanges | None:
     """
     if rig.dim != 3 or rig.labels is None:
         return None
-    parsed = [bone_part(_own_name(name, rig.labels)) for name in rig.labels]
+    parsed = bone_parts(rig.labels)
     if not any(p[0] not in (None, "hips") for p in parsed):
         return None
     J, B = np.asarray(rig.joints, np.float64), np.asarray(rig.bones)

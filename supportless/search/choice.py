@@ -32,7 +32,7 @@ from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .objective import POSED_VERTICES
-from .result import PoseResult, measured_at
+from .result import PoseResult, measured_at, written_verdict
 
 __all__ = ["CHECKS_PER_KIND", "KINDS", "PER_KIND", "PREDICTION_TOLERANCE", "Candidate", "Choice", "candidate_answers", "choose", "pool_of", "print_distance_deg",
            "choose_by_model"]
@@ -228,7 +228,7 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
 
         def clear(angles, _rotation, checks=checks):
             checks["left"] -= 1  # where every pose crosses itself (so does the rest pose) stop asking soon
-            return checks["left"] >= 0 and not rig.self_intersects(angles)
+            return checks["left"] >= 0 and not result.objective.forbidden(angles)
 
         label = kind if kind != "pose and turn" or result.settings.orient == "free" else "pose"
         pool = pool_of(result, kind)
@@ -356,7 +356,7 @@ def crosses_as_written(rig: Rig, result: PoseResult, rest_pairs: int) -> bool:
     """
     if rig.dim != 3 or not result.settings.exact_intersections:
         return False
-    return len(intersecting_faces(result.print_vertices, rig.faces)) > rest_pairs
+    return not written_verdict(rig, result, rest_pairs).allowed
 
 
 def with_choice(result: PoseResult, choice: Choice) -> PoseResult:

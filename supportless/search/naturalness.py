@@ -5,7 +5,9 @@ up: three neck joints at 30 degrees each bend a head 90 degrees into the
 chest. :func:`world_turn_deg` is how far each bone turned in the world from
 its rest direction (its rotation composed with every parent's), and
 :func:`chain_ends` the bones that end a chain (a head, a hand, a tail tip),
-whose turn is the one a person sees. :func:`mirror_error_deg` is how far a
+whose turn is the one a person sees, and :func:`head_bones` the head among
+them, which a person reads first and which gets a tighter bound of its own
+(:attr:`supportless.search.settings.SearchSettings.head_limit`). :func:`mirror_error_deg` is how far a
 pose is from symmetric, for a skeleton with a mirror plane
 (:func:`supportless.search.layout.find_mirror`). :func:`naturalness` gathers
 them for the report, so that a regression shows as a number.
@@ -16,10 +18,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..rig.rig import Rig
-from .anatomy import joint_ranges
+from .anatomy import bone_parts, joint_ranges
 from .layout import Mirror, find_mirror
 
-__all__ = ["chain_ends", "mirror_error_deg", "naturalness", "rotation_angle_deg", "world_turn_deg"]
+__all__ = ["HEAD_TOP_SHARE", "chain_ends", "head_bones", "mirror_error_deg", "naturalness", "rotation_angle_deg",
+           "world_turn_deg"]
+
+#: A head found from the skeleton's shape (:func:`head_bones`) ends the only chain reaching the top 15 % of
+#: the rest skeleton's height, over at least two chains (legs) ending in its bottom 15 %.
+HEAD_TOP_SHARE = 0.15
 
 
 def rotation_angle_deg(R: np.ndarray) -> np.ndarray:
@@ -48,6 +55,44 @@ def chain_ends(rig: Rig) -> np.ndarray:
     has_child = np.zeros(rig.bone_count, bool)
     has_child[parents[parents >= 0]] = True
     return np.flatnonzero(~has_child).astype(np.int64)
+
+
+def head_bones(rig: Rig) -> np.ndarray:
+    """The bones that are the skeleton's head, (k,) int64 (empty when none is clear).
+
+    A bone whose name says head (:func:`supportless.search.anatomy.bone_parts`:
+    Mixamo ``mixamorig:Head``, VRM and Unreal ``head``, VRoid ``J_Bip_C_Head``,
+    Rigify ``DEF-spine.006``, Quaternius ``Head``, the Fox's ``b_Head_05``) is
+    one, whatever hangs from it. A rig without such a name has a head when it
+    stands upright: the chain end (:func:`chain_ends`) that reaches the top
+    :data:`HEAD_TOP_SHARE` of the rest skeleton's height alone, pointing up
+    (within 45 degrees), over at least two chain ends in its bottom share (the
+    legs). A pair of arms or wings (bones off the mirror plane of a skeleton
+    that has one, :func:`supportless.search.layout.find_mirror`) is no head and
+    does not hide one. Otherwise none.
+    """
+    if rig.labels is not None:
+        named = [b for b, part in enumerate(bone_parts(rig.labels)) if part[0] == "head"]
+        if named:
+            return np.array(named, np.int64)
+    J, B, up = np.asarray(rig.joints, np.float64), np.asarray(rig.bones), np.asarray(rig.up, np.float64)
+    h = J @ up
+    span = float(np.ptp(h))
+    ends = chain_ends(rig)
+    if span <= 0 or len(ends) == 0:
+        return np.zeros(0, np.int64)
+    pivots = np.asarray(rig.pivots)
+    far = np.where(B[:, 0] == pivots, B[:, 1], B[:, 0])  # each bone's joint away from the one it turns about
+    mirror = find_mirror(rig) if rig.dim == 3 else None
+    single = ends if mirror is None else ends[mirror.partner[ends] == ends]
+    top = single[h[far[single]] >= h.max() - HEAD_TOP_SHARE * span]
+    feet = ends[h[far[ends]] <= h.min() + HEAD_TOP_SHARE * span]
+    if len(top) != 1 or len(feet) < 2:
+        return np.zeros(0, np.int64)
+    d = J[far[top[0]]] - J[pivots[top[0]]]
+    if d @ up < np.cos(np.radians(45.0)) * np.linalg.norm(d):
+        return np.zeros(0, np.int64)
+    return top.astype(np.int64)
 
 
 def world_turn_deg(rig: Rig, angles: np.ndarray) -> np.ndarray:
@@ -110,7 +155,9 @@ def naturalness(rig: Rig, angles: np.ndarray) -> dict:
         its name when the rig has names): the chain end turned furthest from
         its rest direction; ``largest_joint_deg``: the largest single bone's
         world turn; ``mirror_error_deg``: the pose's distance from symmetric
-        (None when the skeleton has no mirror plane, or in 2D); ``joint_range``:
+        (None when the skeleton has no mirror plane, or in 2D); ``head_turn_deg``:
+        the largest world turn of a head (:func:`head_bones`; None without
+        one); ``joint_range``:
         the named joint nearest (or furthest past) its range of motion
         (:meth:`supportless.search.anatomy.JointRanges.usage`; None when no
         bone's name is one the tables know).
@@ -118,10 +165,12 @@ def naturalness(rig: Rig, angles: np.ndarray) -> dict:
     turn = world_turn_deg(rig, angles)
     ends = chain_ends(rig)
     end = int(ends[np.argmax(turn[ends])])
+    heads = head_bones(rig)
     names = rig.bone_names() if rig.labels is not None else None
     mirror = find_mirror(rig) if rig.dim == 3 else None
     ranges = joint_ranges(rig)
     return {"joint_range": None if ranges is None else ranges.usage(rig.transforms(np.asarray(angles, np.float64))),
             "largest_chain_turn_deg": float(turn[end]), "chain_end": end + 1,
             "chain_end_name": names[end] if names else None, "largest_joint_deg": float(turn.max()),
+            "head_turn_deg": float(turn[heads].max()) if len(heads) else None,
             "mirror_error_deg": None if mirror is None else float(mirror_error_deg(rig, angles, mirror))}

@@ -24,6 +24,7 @@ same default weights work for a 6 cm and a 6 m model and for planar figures.
 
 from __future__ import annotations
 
+import dataclasses
 from functools import cached_property
 
 import numpy as np
@@ -37,9 +38,10 @@ from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from ..files.printframe import REFERENCE_HEIGHT_MM
+from ..rig.contact import ContactRules
 from ..rig.rig import Rig
 from .anatomy import JointRanges
-from .naturalness import chain_ends, rotation_angle_deg
+from .naturalness import chain_ends, head_bones, rotation_angle_deg
 from .prior import PosePrior
 from .standing import Standing
 
@@ -51,6 +53,12 @@ W_ARAP = 2.0
 W_OVERHANG = 1.0
 W_INTERSECT = 50.0
 W_PRIOR = 0.3
+#: Weight of the volume covered twice up to what a contact between jointed parts may cover
+#: (:data:`~supportless.rig.contact.CONTACT_VOLUME`), in place of ``w_intersect``: an arm resting against the
+#: body costs a little (0.2 % of the volume, the Xbot's arms lowered 60 degrees: 0.01, a hundredth of the rest
+#: pose's support), a part through another costs ``w_intersect`` past it, and is refused by the exact gate
+#: (:meth:`Objective.forbidden`) wherever it is not jointed.
+W_CONTACT = 5.0
 #: Weight of the chain ends' squared world turn in the prior (:meth:`Objective.prior_cost`). Chosen on the zoo
 #: and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "The chain limit"): with the 60-degree chain
 #: limit, 0.03 gave zoo 65.2 % (65.7 % at 0), bunny 54.3 % (41.4 %), bb-bunny 44.3 % (41.4 %), smaller turns.
@@ -141,6 +149,10 @@ class Objective:
     joint_ranges : supportless.search.anatomy.JointRanges, optional
         The ranges of motion of the named joints (:func:`supportless.search.anatomy.joint_ranges`): a
         pose with a joint outside its range (a knee bent backwards) does not count.
+    chain_limit, head_limit : float, optional
+        Largest world turn from rest of a chain end (:func:`supportless.search.naturalness.chain_ends`) and of
+        a head (:func:`supportless.search.naturalness.head_bones`), degrees: a pose past one does not count
+        (None: no such rule).
     volume : float, optional
         The volume the distortion and intersection terms are divided by
         (default: the rig's rest volume). A simplified proxy of a dense
@@ -158,7 +170,8 @@ class Objective:
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
                  volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0,
-                 joint_ranges: JointRanges | None = None):
+                 joint_ranges: JointRanges | None = None, contact: ContactRules | None = None,
+                 head_limit: float | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -183,7 +196,10 @@ class Objective:
         self.chain_limit = None if chain_limit is None else float(chain_limit)
         self.w_chain = float(w_chain)
         self._ends = chain_ends(rig)
+        self.head_limit = None if head_limit is None else float(head_limit)
+        self._heads = head_bones(rig) if head_limit is not None else np.zeros(0, np.int64)
         self.joint_ranges = joint_ranges
+        self.contact = contact
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -281,12 +297,15 @@ class Objective:
         return max(1, min(POSE_CHUNK, POSED_VERTICES // max(len(self.rig.vertices), 1)))
 
     def chain_excess(self, transforms: np.ndarray) -> np.ndarray:
-        """How far the chain ends turn past ``chain_limit``: the sum over ends, radians, (P,) float64 (0 when off)."""
-        if self.chain_limit is None:
-            return np.zeros(transforms.shape[:-3])
+        """How far the chain ends turn past ``chain_limit`` and the heads past ``head_limit``: the sum over
+        them, radians, (P,) float64 (0 when off)."""
         d = self.rig.dim
-        turn = rotation_angle_deg(transforms[..., self._ends, :d, :d])
-        return np.radians(np.maximum(turn - self.chain_limit, 0.0)).sum(axis=-1)
+        excess = np.zeros(transforms.shape[:-3])
+        for limit, bones in ((self.chain_limit, self._ends), (self.head_limit, self._heads)):
+            if limit is not None and len(bones):
+                turn = rotation_angle_deg(transforms[..., bones, :d, :d])
+                excess = excess + np.radians(np.maximum(turn - limit, 0.0)).sum(axis=-1)
+        return excess
 
     def posed_violation(self, transforms: np.ndarray, V: np.ndarray) -> np.ndarray:
         """How far posed bodies break the rules measured on the pose, not on the joints' own turns: the chain
@@ -330,10 +349,37 @@ class Objective:
         """The distortion part of this objective's ``terms`` (:func:`distortion` at its weights)."""
         return distortion(terms, self.w_arap, self.w_prior)
 
+    @property
+    def overlap_allowed(self) -> float:
+        """The share of the volume a contact may cover twice (0 when no contact is allowed)."""
+        return 0.0 if self.contact is None or not self.contact.allows_contact else float(self.contact.volume)
+
+    def intersection_cost(self, share) -> np.ndarray:
+        """Weighted cost of the volume covered twice, ``share`` of :attr:`volume` (P,) float64: :data:`W_CONTACT`
+        up to :attr:`overlap_allowed`, ``w_intersect`` past it."""
+        share = np.asarray(share, np.float64)
+        within = np.minimum(share, self.overlap_allowed)
+        return min(W_CONTACT, self.w_intersect) * within + self.w_intersect * (share - within)
+
+    def forbidden(self, angles: np.ndarray) -> bool:
+        """Whether the pose ``angles (m, 3) float64`` crosses itself other than by contact within the rules.
+
+        CGAL's exact test first (stopping at the first crossing); a pose that crosses is then judged by
+        :meth:`Rig.crossings` with :attr:`contact` and its ray-grid overlap. False in 2D.
+        """
+        rig = self.rig
+        if rig.dim != 3 or not rig.self_intersects(angles):
+            return False
+        if self.contact is None or not self.contact.allows_contact:
+            return True
+        V = rig.pose(angles)
+        overlap = float(np.asarray(self._intersection(V[None]))[0])
+        return not rig.crossings(V, rig.posed_joints(angles), self.contact, overlap).allowed
+
     def combine(self, terms: dict) -> np.ndarray:
         """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""
         value = (self.w_arap * terms["arap"] + self.w_overhang * terms["overhang"]
-                 + self.w_intersect * terms["intersection"] + self.w_prior * terms["prior"])
+                 + self.intersection_cost(terms["intersection"]) + self.w_prior * terms["prior"])
         violation = terms["violation"]
         return value + np.where(violation > 0, INFEASIBLE + violation, 0.0)
 
@@ -459,7 +505,7 @@ class Objective:
         if len(todo) and self.w_intersect != 0:
             inter = np.asarray(self._intersection(V[todo]), np.float64)
             overlap[keep[todo]] = inter
-            kept[todo] += self.w_intersect * inter / self.volume
+            kept[todo] += self.intersection_cost(inter / self.volume)
         values[keep] = kept
         return values, overlap
 
@@ -472,8 +518,9 @@ class Objective:
         return {"w_arap": self.w_arap, "w_overhang": self.w_overhang, "w_intersect": self.w_intersect,
                 "overhang_angle": self.overhang_angle, "overhang_model": self.overhang_model,
                 "clusters": self.clusters, "resolution": self.resolution, "w_prior": self.w_prior,
-                "chain_limit": self.chain_limit, "w_chain": self.w_chain,
+                "chain_limit": self.chain_limit, "head_limit": self.head_limit, "w_chain": self.w_chain,
                 "joint_ranges": None if self.joint_ranges is None else self.joint_ranges.describe(),
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
-                "support_floor": self.support_floor}
+                "support_floor": self.support_floor,
+                "contact": None if self.contact is None else dataclasses.asdict(self.contact)}
 

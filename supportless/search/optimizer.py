@@ -29,6 +29,7 @@ from .layout import PoseLayout, find_mirror, require_mirror
 from .naturalness import mirror_error_deg
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
+from .relaxed import relaxed_poses
 from .result import PoseResult, as_written, measured_at, on_full_surface
 from .settings import PSO_PRESETS, SearchSettings
 from .swarm import CMA_SHARE, OPTIMIZERS, OptimizerResult, evolution_strategy, particle_swarm
@@ -283,7 +284,7 @@ class _PoseSearch:
         self.polishing = (settings.polish or 0) if self.k or self.turning else 0
         self.total = settings.iterations * len(self.turns) + self.polishing
         self.overlapping: set = set()  # positions of the last batch whose ray grid saw two layers: they intersect
-        self.intersects = intersects if intersects is not None else rig.self_intersects
+        self.intersects = intersects if intersects is not None else objective.forbidden
         self.seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle) \
             if self.turning and not polish_only else None
 
@@ -328,7 +329,8 @@ class _PoseSearch:
             # bests): a particle's own best is judged by the other terms, the swarm's by all, then exactly
             values, overlap = objective.bounded_overlap(to_angles(X), bound, R, intersection_bound=np.min(bound))
             self.overlapping.clear()
-            self.overlapping.update(X[i].tobytes() for i in np.flatnonzero(overlap > OVERLAP_CERTAIN * objective.volume))
+            certain = max(OVERLAP_CERTAIN, objective.overlap_allowed) * objective.volume  # past any allowed contact
+            self.overlapping.update(X[i].tobytes() for i in np.flatnonzero(overlap > certain))
             return values
 
         def terms_of(x):
@@ -370,10 +372,24 @@ class _PoseSearch:
                 np.asarray(self.start_rotation, np.float64), self.rig.up)]))
         return np.array(starts, np.float64)
 
+    def relaxed_starts(self) -> np.ndarray:
+        """(s, k) float64: positions of :func:`~supportless.search.relaxed.relaxed_poses` (limbs let down),
+        after the start pose's own turns; none with a start pose or when nothing can be let down."""
+        if self.start is not None or not self.k or not self.settings.relaxed_seeds:
+            return np.zeros((0, self.k))
+        rig = self.rig
+        free = ~self.settings.fixed_bones(rig)
+        poses = relaxed_poses(rig, free, self.settings.joint_limits(rig))
+        if not len(poses):
+            return np.zeros((0, self.k))
+        X = np.stack([self.layout.from_angles(a) for a in poses])
+        return np.clip(X, self.layout.lower, self.layout.upper)
+
     def phases(self):
         """Run the phases: ``(best, history, turned, pose_best)`` (``best`` None when there is none)."""
         k, settings = self.k, self.settings
         initial = np.zeros((1, k)) if self.start is None else np.stack([np.zeros(k), self.layout.from_angles(self.base)])
+        initial = np.vstack([initial, self.relaxed_starts()])
         best, history, turned, pose_best = None, [], False, None
         for phase, turns in enumerate(self.turns):
             if turns:

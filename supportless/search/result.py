@@ -22,12 +22,13 @@ import numpy as np
 
 from ..base.geometry import place_on_plate, print_pose
 from ..copyleft.cgal import intersecting_faces
+from ..rig.contact import ContactRules, ContactVerdict, contact_verdict
 from ..rig.rig import Rig
 from .objective import Objective
 from .settings import SearchSettings
 
 __all__ = ["FULL_CHECKS", "PoseResult", "as_written", "at_full_resolution", "faces_of", "measured_at",
-           "on_full_surface"]
+           "on_full_surface", "written_verdict"]
 
 
 @dataclass
@@ -183,7 +184,7 @@ def on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float
     if found.settings.exact_intersections and rig.dim == 3:
         for a, q in [*zip(A[:FULL_CHECKS], Q[:FULL_CHECKS]), (np.zeros_like(angles), Q[0])]:
             stats["full_exact_calls"] += 1
-            if not rig.self_intersects(a):
+            if not objective.forbidden(a):
                 angles, rotation = a, q
                 break
     measured = measured_at(rig, found, angles, rotation, objective)
@@ -222,6 +223,30 @@ def at_full_resolution(rig: Rig, result: PoseResult) -> PoseResult:
 NEXT_ANSWERS = 3
 
 
+def written_verdict(rig: Rig, result: PoseResult, rest_pairs: int) -> ContactVerdict:
+    """Whether ``result``'s mesh as written (``print_vertices`` with ``rig``'s faces) may be written.
+
+    Allowed when it has no more intersecting triangle pairs (CGAL) than the rest pose's ``rest_pairs``, or when
+    every crossing is contact between jointed parts within the search's rules (``settings.contact``,
+    :meth:`Rig.crossings`, the ray grid's overlap in the print frame). Its ``regions`` name the contacts.
+    """
+    from ..energies.intersection import self_intersection_volume
+
+    P = result.print_vertices
+    pairs = intersecting_faces(P, rig.faces)
+    if len(pairs) <= rest_pairs:
+        return ContactVerdict(True, len(pairs))
+    rules = ContactRules() if getattr(result.settings, "contact", False) else None
+    if rules is None:
+        return ContactVerdict(False, len(pairs), f"{len(pairs)} pairs of triangles cross")
+    X = rig.pose(result.angles)  # the same surface before its rigid placement in the print frame
+    R = np.asarray(result.rotation, np.float64)
+    offset = P[0] - X[0] @ R.T
+    joints = rig.posed_joints(result.angles) @ R.T + offset
+    overlap = float(self_intersection_volume(P, rig.faces, rig.up))
+    return contact_verdict(rig.body_parts, P, joints, pairs, rules, overlap, rig.rest_volume)
+
+
 def _next_clear_answer(rig: Rig, result: PoseResult, rest_pairs: int) -> PoseResult | None:
     """The best of ``result.choice``'s other answers whose file crosses itself no more than the rest pose's
     (:data:`NEXT_ANSWERS` at most, by the slicer's support when it chose, else the predicted), or None."""
@@ -237,14 +262,15 @@ def _next_clear_answer(rig: Rig, result: PoseResult, rest_pairs: int) -> PoseRes
                     key=lambda i: support(choice.candidates[i]))
     for i in others[:NEXT_ANSWERS]:
         answer = at_full_resolution(rig, choice.candidates[i].result)
-        written = len(intersecting_faces(answer.print_vertices, rig.faces))
-        if written <= rest_pairs:
+        verdict = written_verdict(rig, answer, rest_pairs)
+        written = verdict.pairs
+        if verdict.allowed:
             why = (f"{choice.reason}; #{choice.chosen + 1} crossed itself at full resolution as written, "
                    f"so #{i + 1}")
             return dataclasses.replace(answer, choice=dataclasses.replace(choice, chosen=i, reason=why),
                                        symmetry=result.symmetry, interrupted=result.interrupted,
                                        stats=dict(answer.stats, written_pairs=written, rest_pairs=rest_pairs,
-                                                  chosen_kind=choice.candidates[i].kind,
+                                                  contacts=verdict.regions, chosen_kind=choice.candidates[i].kind,
                                                   passed_over_as_written=choice.chosen + 1))
     return None
 
@@ -287,9 +313,11 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     if rig.dim != 3 or not result.settings.exact_intersections:
         return result
     rest_pairs = len(intersecting_faces(rig.vertices, rig.faces))
-    written = len(intersecting_faces(result.print_vertices, rig.faces))
-    if written <= rest_pairs:
-        return dataclasses.replace(result, stats=dict(result.stats, written_pairs=written, rest_pairs=rest_pairs))
+    verdict = written_verdict(rig, result, rest_pairs)
+    written = verdict.pairs
+    if verdict.allowed:
+        return dataclasses.replace(result, stats=dict(result.stats, written_pairs=written, rest_pairs=rest_pairs,
+                                                      contacts=verdict.regions))
     if (other := _next_clear_answer(rig, result, rest_pairs)) is not None:
         return other
     rest = np.zeros_like(result.angles)
@@ -298,4 +326,5 @@ def as_written(rig: Rig, result: PoseResult) -> PoseResult:
     chosen = turned if turned.value < upright.value else upright
     pairs = len(intersecting_faces(chosen.print_vertices, rig.faces))
     return dataclasses.replace(chosen, stats=dict(result.stats, written_pairs=pairs, rest_pairs=rest_pairs,
-                                                  fell_back_to_rest=written))
+                                                  fell_back_to_rest=written, refused_as_written=verdict.reason,
+                                                  contacts=[]))

@@ -23,7 +23,8 @@ from ..base.errors import InputError
 from ..energies.raygrid import DEFAULT_RESOLUTION
 from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
-from .anatomy import joint_ranges
+from ..rig.contact import ContactRules
+from .anatomy import bone_part, joint_ranges
 from .objective import OVERHANG_MODELS, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
@@ -52,6 +53,13 @@ JOINT_LIMIT = 45.0
 #: neither) and keeps the dragon's wings spread, the staff across the body and no head bent into a chest.
 CHAIN_LIMIT = 60.0
 
+#: Default largest turn of a head (:func:`supportless.search.naturalness.head_bones`) in the world from its rest
+#: direction, degrees: the chest, neck and head turns together. Tighter than :data:`CHAIN_LIMIT`, since a head
+#: is what a person reads first: a witch searched standing hung her head the chain limit's full 60 degrees
+#: (chest 23, neck and head 45) and her hat covered her face. 25 degrees is a chosen bound, not yet measured
+#: on the zoo.
+HEAD_LIMIT = 25.0
+
 #: Print-orientation modes (:attr:`SearchSettings.orient`).
 ORIENT_MODES = ("free", "keep")
 
@@ -74,6 +82,7 @@ RANGES = {
     "seed": (0, None),
     "joint_limit": (0.0, 180.0),
     "chain_limit": (0.0, 180.0),
+    "head_limit": (0.0, 180.0),
     "overhang_angle": (0.0, 90.0),
     "overhang_margin": (0.0, 45.0),
     "w_arap": (0.0, None),
@@ -157,6 +166,11 @@ class SearchSettings:
         chain, where ``joint_limit`` bounds each joint alone
         (:mod:`supportless.search.naturalness`); default :data:`CHAIN_LIMIT`.
         None (or 180): no such rule.
+    head_limit : float, optional
+        Largest turn of a head (the bone its name says is the head, or the top
+        of an upright figure, :func:`supportless.search.naturalness.head_bones`)
+        in the world from its rest direction, degrees: the same rule as
+        ``chain_limit``, tighter; default :data:`HEAD_LIMIT`. None (or 180): no such rule.
     w_chain : float
         Weight of the chain ends' squared world turn (radians) in the
         natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
@@ -167,6 +181,16 @@ class SearchSettings:
         elbows, spine, neck) within their range of motion
         (:mod:`supportless.search.anatomy`); bones without a known name keep
         the generic limits only.
+    contact : bool
+        Let a part press into a part it is jointed to, near their shared joint
+        (an arm resting against the torso, thighs together): such crossings,
+        within :mod:`supportless.rig.contact`'s bounds, pass the exact gate, and
+        the written body is the posed surface's union with itself. False:
+        any crossing refuses a pose.
+    relaxed_seeds : bool
+        Start some of the swarm's particles at relaxed poses, limbs let down
+        toward gravity (:mod:`supportless.search.relaxed`); the rest pose is
+        always one of them.
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
@@ -225,8 +249,11 @@ class SearchSettings:
     joint_limit: float = JOINT_LIMIT
     limits: tuple = ()
     chain_limit: float | None = CHAIN_LIMIT
+    head_limit: float | None = HEAD_LIMIT
     w_chain: float = W_CHAIN
     anatomy: bool = True
+    contact: bool = True
+    relaxed_seeds: bool = True
     keep_standing: bool = True
     symmetric: bool | None = None
     orient: str = "free"
@@ -265,6 +292,8 @@ class SearchSettings:
             raise InputError(None, f"joint_limit must be within 0..180 degrees, not {self.joint_limit}")
         if self.chain_limit is not None and not _within(self.chain_limit, RANGES["chain_limit"]):
             raise InputError(None, f"chain_limit must be within 0..180 degrees, not {self.chain_limit}")
+        if self.head_limit is not None and not _within(self.head_limit, RANGES["head_limit"]):
+            raise InputError(None, f"head_limit must be within 0..180 degrees, not {self.head_limit}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
             try:
@@ -333,11 +362,16 @@ class SearchSettings:
                          clusters=self.clusters, resolution=self.resolution, backend=self.backend,
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
                          keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
-                         chain_limit=self.chain_limit, w_chain=self.w_chain,
-                         joint_ranges=joint_ranges(rig) if self.anatomy else None)
+                         chain_limit=self.chain_limit, head_limit=self.head_limit, w_chain=self.w_chain,
+                         joint_ranges=joint_ranges(rig) if self.anatomy else None,
+                         contact=ContactRules() if self.contact else None)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.
+
+        With ``anatomy``, a named upper arm of a humanoid may turn as far as its swing range
+        (:data:`~supportless.search.anatomy.HUMANOID_TABLE`, 90 degrees) when that is more: a T-posed figure's
+        arms come down to its sides.
 
         Raises
         ------
@@ -345,6 +379,13 @@ class SearchSettings:
             For a bone that is not a bone number of ``rig``.
         """
         out = np.full(rig.bone_count, float(self.joint_limit))
+        if self.anatomy and self.joint_limit > 0:  # a named upper arm swings as far as its range: arms let down
+            ranges = joint_ranges(rig)
+            if ranges is not None and ranges.table == "humanoid":
+                arms = np.array([i for i, name in enumerate(ranges.names) if bone_part(name)[0] == "upper_arm"],
+                                np.int64)
+                if len(arms):
+                    out[ranges.child[arms]] = np.maximum(out[ranges.child[arms]], np.degrees(ranges.swing[arms]))
         for item in self.limits:
             bone, _, value = item.partition("=")
             out[bone_index(bone, rig.bone_count, rig.labels)] = float(value)

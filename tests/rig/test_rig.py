@@ -503,12 +503,12 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
 
     monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(0))  # the full-surface check of the proxy's answers
     monkeypatch.setattr(search_mod, "as_written", lambda rig, found: found)  # the real last gate would see the fake
-    clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)  # the choice, before any polish
+    clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0, contact=False)  # before any polish
     assert clear.stats["full_exact_calls"] == 1
     np.testing.assert_allclose(seen[0], rig.pose(clear.angles))  # the proxy's answer, checked on the full surface
     seen.clear()
     monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(1))
-    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0)
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0, contact=False)
     assert result.stats["full_exact_calls"] == 2
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
     np.testing.assert_allclose(seen[1], rig.pose(result.angles))
@@ -534,7 +534,7 @@ def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monke
     assert result.stats["full_polish_evaluations"] == 1 + 3 * search_mod.POLISH_SAMPLES
     assert result.value <= chosen.value  # it starts at the chosen pose and keeps it unless it finds better
     np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)  # full surface
-    assert result.objective.rig is rig and not rig.self_intersects(result.angles)
+    assert result.objective.rig is rig and not result.objective.forbidden(result.angles)
     # the progress counts the proxy's 4 iterations and the polish's 3 as one search of 7
     assert seen == [(it, 7) for it in range(1, 8)]
     assert len(result.history) == len(chosen.history) + 3

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import supportless as sl
-from supportless.search.anatomy import bone_part, joint_ranges
-from supportless.search.naturalness import naturalness
+from supportless.search.anatomy import HUMANOID_TABLE, QUADRUPED_TABLE, bone_part, bone_parts, joint_ranges
+from supportless.search.naturalness import head_bones, naturalness
 from supportless.search.objective import INFEASIBLE
 
 #: The tpose's 15 bones (hips -> chest -> neck -> head, clavicle-arm-forearm, pelvis side-thigh-shin),
@@ -132,3 +132,58 @@ def test_a_search_keeps_every_named_joint_in_range(named):
                         keep_standing=False, joint_limit=90.0)
     assert naturalness(named, found.angles)["joint_range"]["outside_deg"] == pytest.approx(0.0, abs=1e-9)
     assert found.settings.anatomy
+
+
+@pytest.mark.parametrize("neck, head", [
+    ("mixamorig:Neck", "mixamorig:Head"),     # Mixamo
+    ("neck", "head"),                         # VRM, Unreal
+    ("neck_01", "head"),                      # Unreal
+    ("J_Bip_C_Neck", "J_Bip_C_Head"),         # VRoid's centre bones
+    ("DEF-neck", "DEF-head"),                 # Blender
+    ("Neck", "Head"),                         # Quaternius
+    ("b_Neck_04", "b_Head_05"),               # the Fox, four legs
+    ("CC_Base_NeckTwist01", "CC_Base_Head"),  # Character Creator
+])
+def test_every_naming_scheme_names_its_neck_and_head(neck, head):
+    assert (bone_part(neck)[0], bone_part(head)[0]) == ("neck", "head")
+    assert [p[0] for p in bone_parts(["spine", neck, head])] == ["spine", "neck", "head"]
+
+
+def test_rigify_names_its_neck_and_head_by_the_spine_numbers():
+    spine = [f"DEF-spine.{i:03d}" if i else "DEF-spine" for i in range(7)]
+    assert [p[0] for p in bone_parts(spine)] == ["spine"] * 4 + ["neck", "neck", "head"]
+    assert [p[0] for p in bone_parts(spine[:5])] == ["spine"] * 5  # a spine that does not end at .006
+
+
+def test_the_tables_hold_a_neck_and_a_head_with_small_cones():
+    for table in (HUMANOID_TABLE, QUADRUPED_TABLE):
+        for part in ("neck", "head"):
+            assert table[part].kind == "ball" and 25.0 <= table[part].swing <= 45.0 and table[part].twist <= 45.0
+
+
+#: The tpose named as VRoid and Rigify name their bones (Mixamo's is :data:`MIXAMO_TPOSE`).
+VROID_TPOSE = ["J_Bip_C_Chest", "J_Bip_C_Neck", "J_Bip_C_Head",
+               "J_Bip_L_Shoulder", "J_Bip_L_UpperArm", "J_Bip_L_LowerArm",
+               "J_Bip_R_Shoulder", "J_Bip_R_UpperArm", "J_Bip_R_LowerArm",
+               "J_Bip_C_Hips", "J_Bip_L_UpperLeg", "J_Bip_L_LowerLeg",
+               "J_Bip_R_Hips", "J_Bip_R_UpperLeg", "J_Bip_R_LowerLeg"]
+RIGIFY_TPOSE = ["DEF-spine.003", "DEF-spine.004", "DEF-spine.006",
+                "DEF-shoulder.L", "DEF-upper_arm.L", "DEF-forearm.L",
+                "DEF-shoulder.R", "DEF-upper_arm.R", "DEF-forearm.R",
+                "DEF-spine", "DEF-thigh.L", "DEF-shin.L",
+                "DEF-pelvis.R", "DEF-thigh.R", "DEF-shin.R"]
+
+
+@pytest.mark.parametrize("labels", [MIXAMO_TPOSE, VROID_TPOSE, RIGIFY_TPOSE], ids=["Mixamo", "VRoid", "Rigify"])
+def test_a_named_figure_ranges_its_neck_and_head_and_bounds_its_head(tpose_rig, labels):
+    rig = copy.copy(tpose_rig)
+    rig.labels = list(labels)
+    ranges = joint_ranges(rig)
+    assert ranges.table == "humanoid" and {NECK, NECK + 1} <= set(ranges.child.tolist())
+    assert ranges.parent[ranges.child.tolist().index(NECK + 1)] == NECK  # the head turns on the neck
+    assert head_bones(rig).tolist() == [NECK + 1]
+    objective = sl.SearchSettings(keep_standing=False, free=("all",)).objective(rig)
+    nod = np.zeros((rig.bone_count, 3))
+    nod[[NECK, NECK + 1], 0] = np.radians(20.0)  # each joint well within its range, the head 40 degrees down
+    assert ranges.excess(rig.transforms(nod)) == pytest.approx(0.0)
+    assert objective.terms(nod)["violation"] == pytest.approx(np.radians(15.0))

@@ -5,8 +5,10 @@ import pytest
 
 import supportless as sl
 from supportless.base.kinematics import euler_to_matrix, matrix_to_euler
+from supportless.search.objective import INFEASIBLE
 from supportless.search.layout import find_mirror
-from supportless.search.naturalness import chain_ends, mirror_error_deg, naturalness, rotation_angle_deg, world_turn_deg
+from supportless.search.naturalness import (chain_ends, head_bones, mirror_error_deg, naturalness, rotation_angle_deg,
+                                           world_turn_deg)
 
 
 @pytest.fixture(scope="module")
@@ -61,8 +63,6 @@ def test_a_mirrored_pose_has_no_mirror_error_and_one_arm_alone_has(tpose_rig):
 
 def test_the_chain_limit_rejects_a_chain_turned_past_it_and_the_search_keeps_it(arm):
     """Three joints at 30 degrees turn the end 90: feasible under no limit, infeasible under 60 degrees."""
-    from supportless.search.objective import INFEASIBLE
-
     A = np.zeros((arm.bone_count, 3))
     A[[2, 1, 0], 2] = np.radians(30.0)
     free = sl.SearchSettings(joint_limit=45.0, keep_standing=False, free=("all",), chain_limit=None).objective(arm)
@@ -91,3 +91,44 @@ def test_the_prior_pays_for_the_accumulated_turn_of_a_chain(arm):
     assert chained.terms(same)["prior"] > chained.terms(mixed)["prior"]
     rest = np.zeros_like(same)
     assert chained.terms(rest)["prior"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_an_unnamed_upright_figure_finds_its_head_and_a_chain_has_none(tpose_rig, arm):
+    """The tpose's head (hips -> chest -> neck -> head, bone 3) ends the only chain at the top; the arm has no head."""
+    assert tpose_rig.labels is None
+    heads = head_bones(tpose_rig)
+    assert heads.tolist() == [2] and heads[0] in chain_ends(tpose_rig)
+    top = tpose_rig.joints @ tpose_rig.up
+    assert top[tpose_rig.bones[2, 1]] == pytest.approx(top.max())  # its tip is the skeleton's highest joint
+    assert head_bones(arm).size == 0
+
+
+def test_a_head_turned_40_degrees_is_refused_and_a_hand_turned_40_allowed(tpose_rig):
+    """The head limit (25 degrees by default) is tighter than the chain limit (60) that bounds a hand."""
+    head, hand = 2, 5  # the tpose's head and left forearm, both chain ends
+    assert hand in chain_ends(tpose_rig) and hand not in head_bones(tpose_rig)
+    defaults = sl.SearchSettings()
+    assert defaults.head_limit == 25.0 and defaults.head_limit < defaults.chain_limit
+    objective = sl.SearchSettings(keep_standing=False, free=("all",)).objective(tpose_rig)
+    nod, wave = np.zeros((2, tpose_rig.bone_count, 3))
+    nod[head, 0] = wave[hand, 1] = np.radians(40.0)
+    assert world_turn_deg(tpose_rig, nod)[head] == pytest.approx(40.0) == world_turn_deg(tpose_rig, wave)[hand]
+    assert objective.terms(wave)["violation"] == pytest.approx(0.0) and float(objective(wave)) < INFEASIBLE
+    assert objective.terms(nod)["violation"] == pytest.approx(np.radians(15.0))  # 15 degrees past 25
+    assert float(objective(nod)) >= INFEASIBLE
+    off = sl.SearchSettings(keep_standing=False, free=("all",), head_limit=None).objective(tpose_rig)
+    assert off.terms(nod)["violation"] == pytest.approx(0.0)
+    assert naturalness(tpose_rig, nod)["head_turn_deg"] == pytest.approx(40.0)
+    with pytest.raises(sl.InputError, match="head_limit"):
+        sl.SearchSettings(head_limit=200.0)
+
+
+def test_the_head_limit_bounds_the_neck_chain_together(tpose_rig):
+    """Chest, neck and head at 10 degrees each the same way: no joint is far, the head 30 degrees is."""
+    objective = sl.SearchSettings(keep_standing=False, free=("all",)).objective(tpose_rig)
+    bow = np.zeros((tpose_rig.bone_count, 3))
+    bow[[0, 1, 2], 0] = np.radians(10.0)
+    assert world_turn_deg(tpose_rig, bow)[2] == pytest.approx(30.0)
+    assert objective.terms(bow)["violation"] == pytest.approx(np.radians(5.0))
+    bow[1, 0] = -bow[1, 0]  # the neck back: the head stays up
+    assert objective.terms(bow)["violation"] == pytest.approx(0.0)

@@ -55,10 +55,11 @@ def test_without_exact_checks_the_result_is_left_as_it_is(tpose_rig):
 
 def test_a_chosen_answer_crossing_itself_as_written_gives_way_to_the_next_clear_answer(branch_rig, monkeypatch):
     """A sculpt's answers are weighed on its reduced surface: the one chosen may cross itself at full resolution.
-    The gate then takes the best predicted of the other answers that does not, not the rest pose."""
+    The gate then takes the best predicted of the other answers that does not, not the rest pose. (No contact
+    allowed: the stand-in pairs below are not placed anywhere a contact could be judged.)"""
     from supportless.search import result as result_mod
 
-    found = sl.optimize(branch_rig, particles=8, iterations=3, seed=0)
+    found = sl.optimize(branch_rig, particles=8, iterations=3, seed=0, contact=False)
     assert found.choice is not None and len(found.choice.candidates) >= 2
     chosen = found.choice.chosen
     bad = found.print_vertices.copy()

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import supportless as sl
+from supportless.rig.contact import ContactRules
 from supportless.search.optimizer import POLISH_SAMPLES, particle_swarm
 from supportless.search.settings import PSO_PRESETS, SearchSettings, resolve_fixed_bones
 
@@ -133,10 +134,16 @@ def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
     rig = branch_rig
     settings = SearchSettings(particles=24, iterations=10, seed=0, w_intersect=0.0,
                               w_arap=0.0, w_prior=0.0, joint_limit=170.0, keep_standing=False, free=("all",),
-                              orient="keep")
+                              orient="keep", contact=False)
     gated = sl.optimize(rig, settings)
     assert gated.stats["exact_calls"] > 0
     assert intersecting_face_pairs(rig.pose(gated.angles), rig.faces) == 0
+    # with contact between jointed parts allowed, whatever crossing the answer has is such a contact
+    touching = sl.optimize(rig, settings.replace(contact=True))
+    A = touching.angles
+    V = rig.pose(A)
+    assert rig.crossings(V, rig.posed_joints(A), ContactRules(),
+                         float(sl.self_intersection_volume(V, rig.faces, rig.up))).allowed
     open_gate = sl.optimize(rig, settings.replace(exact_intersections=False))
     assert "exact_calls" not in open_gate.stats
     # the ungated search does reach poses that intersect: the gate changed the result
@@ -230,7 +237,7 @@ def test_orient_keep_is_the_pose_only_search(branch_rig):
     from supportless.search.settings import PSO_PRESETS
 
     rig, settings = branch_rig, SearchSettings(particles=16, iterations=8, seed=5, orient="keep",
-                                               exact_intersections=False, symmetric=False)
+                                               exact_intersections=False, symmetric=False, relaxed_seeds=False)
     kept = sl.optimize(rig, settings)
     objective = settings.objective(rig)
     layout = PoseLayout(rig, settings.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
@@ -461,11 +468,11 @@ def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monk
         asked.append(answer)
         return answer
 
-    fast = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted)
+    fast = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted, contact=False)
     fast_asked = list(asked)
     asked.clear()
     monkeypatch.setattr(search_mod, "OVERLAP_CERTAIN", np.inf)  # CGAL asked about every candidate
-    slow = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted)
+    slow = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted, contact=False)
     assert fast.stats["overlap_rejections"] >= 3 and slow.stats["overlap_rejections"] == 0
     assert len(asked) == len(fast_asked) + fast.stats["overlap_rejections"]
     assert sum(asked) == sum(fast_asked) + fast.stats["overlap_rejections"]  # CGAL agreed: each one intersects
