@@ -43,6 +43,7 @@ from ..rig.rig import Rig
 from .anatomy import JointRanges
 from .naturalness import chain_ends, head_bones, rotation_angle_deg
 from .prior import PosePrior
+from .relaxed import ArmDrops, without_drop
 from .standing import Standing
 
 __all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT",
@@ -170,7 +171,7 @@ class Objective:
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
                  volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0,
-                 joint_ranges: JointRanges | None = None, contact: ContactRules | None = None,
+                 joint_ranges: JointRanges | None = None, contact: ContactRules | None = None, drops: ArmDrops | None = None,
                  head_limit: float | None = None):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
@@ -192,10 +193,12 @@ class Objective:
         self.support_floor = float(support_floor)
         if volume is not None:
             self.__dict__["volume"] = float(volume)  # fills the cached property below
-        self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)))
+        self.prior = PosePrior(rig, np.broadcast_to(np.asarray(joint_limits, np.float64), (rig.bone_count,)), drops)
+        self.drops = drops
         self.chain_limit = None if chain_limit is None else float(chain_limit)
         self.w_chain = float(w_chain)
         self._ends = chain_ends(rig)
+        self._end_arms = _arms_above(rig, self._ends, drops)  # (k,) the dropped arm above each chain end, or -1
         self.head_limit = None if head_limit is None else float(head_limit)
         self._heads = head_bones(rig) if head_limit is not None else np.zeros(0, np.int64)
         self.joint_ranges = joint_ranges
@@ -301,11 +304,28 @@ class Objective:
         them, radians, (P,) float64 (0 when off)."""
         d = self.rig.dim
         excess = np.zeros(transforms.shape[:-3])
-        for limit, bones in ((self.chain_limit, self._ends), (self.head_limit, self._heads)):
-            if limit is not None and len(bones):
-                turn = rotation_angle_deg(transforms[..., bones, :d, :d])
-                excess = excess + np.radians(np.maximum(turn - limit, 0.0)).sum(axis=-1)
+        for limit, turn in ((self.chain_limit, lambda: self._end_turns_deg(transforms)),
+                            (self.head_limit, lambda: rotation_angle_deg(transforms[..., self._heads, :d, :d]))):
+            if limit is not None and (len(self._ends) if limit is self.chain_limit else len(self._heads)):
+                excess = excess + np.radians(np.maximum(turn() - limit, 0.0)).sum(axis=-1)
         return excess
+
+    def _end_turns_deg(self, transforms: np.ndarray) -> np.ndarray:
+        """(..., k) float64 degrees: each chain end's turn in the world from its rest direction, less the turn
+        down of a named upper arm above it (:func:`~supportless.search.relaxed.without_drop`): a hand follows
+        its arm down at no cost."""
+        d = self.rig.dim
+        R = transforms[..., self._ends, :d, :d]
+        below = np.flatnonzero(self._end_arms >= 0)
+        if self.drops is None or not len(below):
+            return rotation_angle_deg(R)
+        k = self._end_arms[below]
+        arm = transforms[..., self.drops.bones[k], :d, :d]
+        rest = without_drop(arm, self.drops.axes[k], self.drops.reach[k])
+        down = arm @ np.swapaxes(rest, -1, -2)  # D, the arm's turn down: arm = D rest
+        R = R.copy()
+        R[..., below, :, :] = np.swapaxes(down, -1, -2) @ R[..., below, :, :]
+        return rotation_angle_deg(R)
 
     def posed_violation(self, transforms: np.ndarray, V: np.ndarray) -> np.ndarray:
         """How far posed bodies break the rules measured on the pose, not on the joints' own turns: the chain
@@ -324,8 +344,7 @@ class Objective:
         cost = self.prior.cost(angles)
         if not self.w_chain:
             return cost
-        d = self.rig.dim
-        turn = np.radians(rotation_angle_deg(transforms[..., self._ends, :d, :d]))
+        turn = np.radians(self._end_turns_deg(transforms))
         return cost + self.w_chain * (turn ** 2).sum(axis=-1)
 
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
@@ -524,3 +543,17 @@ class Objective:
                 "support_floor": self.support_floor,
                 "contact": None if self.contact is None else dataclasses.asdict(self.contact)}
 
+
+def _arms_above(rig: Rig, ends: np.ndarray, drops: ArmDrops | None) -> np.ndarray:
+    """(k,) int64: for each chain end, the index in ``drops`` of the named upper arm it hangs from in the
+    kinematic tree, -1 for none."""
+    out = np.full(len(ends), -1, np.int64)
+    if drops is None:
+        return out
+    where = {int(b): i for i, b in enumerate(drops.bones)}
+    for j, end in enumerate(ends):
+        b = int(end)
+        while b >= 0 and b not in where:
+            b = int(rig.parents[b])
+        out[j] = where.get(b, -1)
+    return out

@@ -375,7 +375,7 @@ class _PoseSearch:
     def relaxed_starts(self) -> np.ndarray:
         """(s, k) float64: positions of :func:`~supportless.search.relaxed.relaxed_poses` (limbs let down),
         after the start pose's own turns; none with a start pose or when nothing can be let down."""
-        if self.start is not None or not self.k or not self.settings.relaxed_seeds:
+        if self.start is not None or not self.k or not self.settings.relaxed:
             return np.zeros((0, self.k))
         rig = self.rig
         free = ~self.settings.fixed_bones(rig)

@@ -21,6 +21,7 @@ import numpy as np
 
 from ..base.kinematics import euler_to_matrix, topological_order
 from ..rig.rig import Rig
+from .relaxed import ArmDrops, without_drop
 
 __all__ = ["PosePrior", "joint_angles"]
 
@@ -58,8 +59,9 @@ class PosePrior:
         Largest rotation of each joint, degrees.
     """
 
-    def __init__(self, rig: Rig, limits: np.ndarray):
+    def __init__(self, rig: Rig, limits: np.ndarray, drops: ArmDrops | None = None):
         self.rig = rig
+        self.drops = drops
         self.limits = np.radians(np.asarray(limits, np.float64))
         if self.limits.shape != (rig.bone_count,):
             raise ValueError(f"limits must have one value per bone ({rig.bone_count}), not {self.limits.shape}")
@@ -79,8 +81,20 @@ class PosePrior:
         return joint_angles(angles, self.rig.dim)
 
     def cost(self, angles: np.ndarray) -> np.ndarray:
-        """Volume-weighted rotation cost ``sum_b c_b theta_b^2``, (P,) float64 or float."""
-        return self.angles(angles) ** 2 @ self.carried
+        """Volume-weighted rotation cost ``sum_b c_b theta_b^2``, (P,) float64 or float.
+
+        A named upper arm's ``theta`` is what it turns besides letting itself down toward the body
+        (:func:`~supportless.search.relaxed.without_drop`, with ``drops``): arms at the sides are no less
+        natural than in a T.
+        """
+        theta = self.angles(angles)
+        if self.drops is not None and self.rig.dim == 3:
+            b = self.drops.bones
+            R = euler_to_matrix(np.asarray(angles, np.float64)[..., b, :])
+            rest = without_drop(R, self.drops.axes, self.drops.reach)
+            theta = theta.copy()
+            theta[..., b] = np.arccos(np.clip((np.trace(rest, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0))
+        return theta ** 2 @ self.carried
 
     def excess(self, angles: np.ndarray) -> np.ndarray:
         """How far joints turn past their limits, summed (radians), (P,) float64 or float; 0 within them."""

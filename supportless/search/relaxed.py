@@ -22,6 +22,12 @@ on the plate) where they are, and is mirror-symmetric for a symmetric rest
 skeleton (each side turns toward its own down). The rest pose stays among the
 particles (the search adds it); the symmetry, chain, anatomy and standing
 rules judge the seeds like any other position.
+
+Letting an arm down is no departure from a natural pose: :func:`arm_drops`
+names each upper arm's way down (an axis and how far, to hanging straight),
+and :func:`without_drop` takes that turn out of a rotation, so the pose prior
+and the chain limit (:class:`supportless.search.objective.Objective`) judge
+what the arm and the hand do besides coming down.
 """
 
 from __future__ import annotations
@@ -29,11 +35,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from dataclasses import dataclass
+
 from ..base.kinematics import euler_to_matrix, matrix_to_euler
 from ..rig.rig import Rig
 from .anatomy import bone_parts
 
-__all__ = ["ARM_DROPS", "LIMB_SHARES", "limb_bones", "relaxed_poses"]
+__all__ = ["ARM_DROPS", "LIMB_SHARES", "ArmDrops", "arm_drops", "limb_bones", "relaxed_poses", "without_drop"]
 
 #: Degrees a named upper arm is turned down from its rest direction, one seed each (capped at hanging down).
 ARM_DROPS = (30.0, 45.0, 60.0, 75.0)
@@ -45,6 +53,75 @@ LIMB_SHARES = (0.5, 0.8)
 #: further than this from it (pointing up more than 45 degrees: a spine, a neck, an ear).
 HANGING_DEGREES = 20.0
 RISING_DEGREES = 135.0
+
+
+@dataclass(frozen=True)
+class ArmDrops:
+    """The named upper arms of a rig and their way down.
+
+    Attributes
+    ----------
+    bones : (k,) int64
+        The upper arms.
+    axes : (k, 3) float64
+        Unit axis of each arm's turn toward straight down (rest direction x down).
+    reach : (k,) float64
+        How far, radians: the rest angle between the arm and straight down.
+    """
+
+    bones: np.ndarray
+    axes: np.ndarray
+    reach: np.ndarray
+
+
+def arm_drops(rig: Rig) -> ArmDrops | None:
+    """The :class:`ArmDrops` of a rig whose bone names the anatomy tables read as upper arms; None for other rigs
+    (and a planar one)."""
+    if rig.labels is None or rig.dim != 3:
+        return None
+    down = -np.asarray(rig.up, np.float64)
+    bones, axes, reach = [], [], []
+    for b, part in enumerate(bone_parts(rig.labels)):
+        if part[0] != "upper_arm":
+            continue
+        root, tip = rig.joints[rig.bones[b]]
+        d = tip - root
+        axis = np.cross(d, down)
+        if np.linalg.norm(d) <= 0 or np.linalg.norm(axis) < 1e-9 * np.linalg.norm(d):
+            continue
+        bones.append(b)
+        axes.append(axis / np.linalg.norm(axis))
+        reach.append(float(np.arccos(np.clip(d @ down / np.linalg.norm(d), -1.0, 1.0))))
+    if not bones:
+        return None
+    return ArmDrops(np.array(bones, np.int64), np.array(axes), np.array(reach))
+
+
+def without_drop(R: np.ndarray, axes: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Rotations with their turn down taken out: ``D^T R``, ``D`` the turn about ``axes`` nearest ``R`` (its twist
+    about the axis) with its angle held in ``[0, reach]``.
+
+    Parameters
+    ----------
+    R : (..., k, 3, 3) float64
+    axes : (k, 3) float64
+        Unit axes.
+    reach : (k,) float64
+        Radians.
+
+    Returns
+    -------
+    rest : (..., k, 3, 3) float64
+        The identity for a rotation that is only a turn down within reach.
+    """
+    R = np.asarray(R, np.float64)
+    q = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat().reshape(*R.shape[:-2], 4)  # x, y, z, w
+    along = np.einsum("...ki,ki->...k", q[..., :3], axes)
+    theta = 2.0 * np.arctan2(along, q[..., 3])
+    theta = np.where(theta > np.pi, theta - 2 * np.pi, np.where(theta < -np.pi, theta + 2 * np.pi, theta))
+    theta = np.clip(theta, 0.0, reach)
+    D = Rotation.from_rotvec((axes * theta[..., None]).reshape(-1, 3)).as_matrix().reshape(R.shape)
+    return np.swapaxes(D, -1, -2) @ R
 
 
 def limb_bones(rig: Rig, free: np.ndarray) -> np.ndarray:

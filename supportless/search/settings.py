@@ -25,6 +25,7 @@ from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angl
 from ..rig.rig import Rig
 from ..rig.contact import ContactRules
 from .anatomy import bone_part, joint_ranges
+from .relaxed import arm_drops
 from .objective import OVERHANG_MODELS, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
@@ -187,10 +188,12 @@ class SearchSettings:
         within :mod:`supportless.rig.contact`'s bounds, pass the exact gate, and
         the written body is the posed surface's union with itself. False:
         any crossing refuses a pose.
-    relaxed_seeds : bool
+    relaxed : bool
         Start some of the swarm's particles at relaxed poses, limbs let down
-        toward gravity (:mod:`supportless.search.relaxed`); the rest pose is
-        always one of them.
+        toward gravity (:mod:`supportless.search.relaxed`; the rest pose is
+        always one of them), and, with ``anatomy``, count a named upper arm's
+        turn down toward the body as no departure from a natural pose (the
+        prior and the chain limit judge what else it and its hand do).
     keep_standing : bool
         Reject poses that touch the plate with a new part or fall over
         (:mod:`supportless.search.standing`).
@@ -253,7 +256,7 @@ class SearchSettings:
     w_chain: float = W_CHAIN
     anatomy: bool = True
     contact: bool = True
-    relaxed_seeds: bool = True
+    relaxed: bool = True
     keep_standing: bool = True
     symmetric: bool | None = None
     orient: str = "free"
@@ -364,7 +367,8 @@ class SearchSettings:
                          keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
                          chain_limit=self.chain_limit, head_limit=self.head_limit, w_chain=self.w_chain,
                          joint_ranges=joint_ranges(rig) if self.anatomy else None,
-                         contact=ContactRules() if self.contact else None)
+                         contact=ContactRules() if self.contact else None,
+                         drops=arm_drops(rig) if self.relaxed and self.anatomy else None)
 
     def joint_limits(self, rig: Rig) -> np.ndarray:
         """Largest rotation of each joint, degrees: ``joint_limit`` with the per-bone ``limits``, (m,) float64.

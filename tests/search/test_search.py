@@ -237,7 +237,7 @@ def test_orient_keep_is_the_pose_only_search(branch_rig):
     from supportless.search.settings import PSO_PRESETS
 
     rig, settings = branch_rig, SearchSettings(particles=16, iterations=8, seed=5, orient="keep",
-                                               exact_intersections=False, symmetric=False, relaxed_seeds=False)
+                                               exact_intersections=False, symmetric=False, relaxed=False)
     kept = sl.optimize(rig, settings)
     objective = settings.objective(rig)
     layout = PoseLayout(rig, settings.fixed_bones(rig), np.zeros((rig.bone_count, 3)),
