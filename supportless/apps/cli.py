@@ -23,12 +23,13 @@ from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..search.settings import RANGES, SearchSettings
 from ..shapes import DEMO_FIGURES
 from .cli_batch import batch
+from .rest_guard import fallback_warnings, predicted_worse, rest_instead, sliced_worse
 from .cli_common import (
     EXIT_INTERRUPTED,
     EXIT_MISSING_TOOL,
     EXIT_WRITE_FAILED,
     UP_HELP,
-    _console, _contact_line,
+    _check_bones_early, _console, _contact_line, _print_choice,
     _fail,
     _Group,
     _load,
@@ -205,7 +206,7 @@ def _summary_table(report: dict, verbose: bool = False):
     return table
 
 
-def _write_outputs(rig, result, report, output, pose, report_path, pictures, frame, upright=None):
+def _write_outputs(rig, result, report, output, pose, report_path, pictures, frame, upright=None, standing=None):
     """Write the result's files (:func:`supportless.report.outputs.write_result`); a file that cannot be
     written is one line on stderr. Returns ([(label, path)] written, number that failed)."""
     from ..base.crash import stage
@@ -213,7 +214,7 @@ def _write_outputs(rig, result, report, output, pose, report_path, pictures, fra
 
     stage("writing")
     written, failed = write_result(rig, result, report, frame, output=output, upright=upright, pose=pose,
-                                   pictures=pictures, report_path=report_path)
+                                   pictures=pictures, report_path=report_path, standing=standing)
     for path, exc in failed:
         click.echo(f"supportless: error: {path}: cannot write: {exc.strerror or exc}", err=True)
     return written, len(failed)
@@ -234,6 +235,8 @@ def _inputs(model, skeleton=None, tets=None, weights=None, *more):
                    "(.stl, .3mf, .obj, .ply, .off; .glb: glTF's +Y up, metres).")
 @click.option("--upright-out", type=click.Path(dir_okay=False), default=None,
               help="Also write the posed mesh standing as the input stood.")
+@click.option("--standing-out", type=click.Path(dir_okay=False), default=None,
+              help="Also write the best answer printed standing, as displayed (when the answer is turned to print).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None, help="JSON report.")
 @click.option("--pose", type=click.Path(dir_okay=False), default=None, help="Pose JSON (for `apply`).")
 @click.option("--pictures", type=click.Path(file_okay=False), default=None,
@@ -259,7 +262,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     """Search a pose (and print orientation) of MODEL that needs less support, and write it."""
     from ..report.report import build_report
 
-    for path in (output, upright_out):
+    standing_out = search_options.pop("standing_out")
+    for path in (output, upright_out, standing_out):
         _check_mesh_path(path)
     profile_path = search_options.pop("printer_profile")
     bones, skeleton_out = search_options.pop("bones"), search_options.pop("skeleton_out")
@@ -271,7 +275,8 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
             _fail("--pareto and --slice-rank do not go together; choose one")
         meshes, poses, gallery = front_paths(output, pareto_count)
         front_files = [("--pareto", f) for f in (*meshes, *poses, gallery)]
-    check_output_paths([("-o", output), ("--upright-out", upright_out), ("--report", report_path), ("--pose", pose),
+    check_output_paths([("-o", output), ("--upright-out", upright_out), ("--standing-out", standing_out),
+                        ("--report", report_path), ("--pose", pose),
                     ("--skeleton-out", skeleton_out), *front_files], [("--pictures", pictures)], _inputs(model, skeleton, tets, weights, profile_path))
     choice, profile = _slicer_setup(slicer, support, cura_definitions, profile_path)
     settings = _settings(profile, **search_options)
@@ -305,22 +310,27 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
             extra["pareto_seconds"] = front.seconds
         with step("measuring the report (rest and found pose)"):
             report = build_report(rig, result, frame) | extra
-        written, failed = _write_outputs(rig, result, report, output, pose, report_path, pictures, frame,
-                                         upright=upright_out)
+            if not slice_check_flag and predicted_worse(report):  # without a slicer, the prediction guards
+                result = rest_instead(rig, result, "the slicer model's prediction")
+                report = build_report(rig, result, frame) | extra
+        outputs, more = (output, pose, report_path, pictures, frame), {"upright": upright_out, "standing": standing_out}
+        written, failed = _write_outputs(rig, result, report, *outputs, **more)
         if front is not None:
             written += front_written
     stopped = result.interrupted or interrupt_requested()
-    if slice_check_flag and not failed and not stopped:  # the slicer's figures lead the summary
+    for attempt in (0, 1) if slice_check_flag and not failed and not stopped else ():  # the slicer's word leads
         report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile,
                                    choice=choice)
+        if attempt or not sliced_worse(report):
+            break
+        result = rest_instead(rig, result, choice.label if choice is not None else "PrusaSlicer")
+        report = build_report(rig, result, frame) | extra
+        written, failed = _write_outputs(rig, result, report, *outputs, **more)
     _print_results(console, report, verbose)  # after the files: a closed stdout (| head) loses nothing
     if result.choice is not None:
         _print_choice(console, result.choice, slicer_tried=sliced, label=choice.label)
-    if result.stats.get("fell_back_to_rest"):
-        turned = not np.allclose(result.rotation, np.eye(rig.dim))
-        click.echo(f"supportless: warning: {rig.name}: the pose found crosses itself as written "
-                   f"({result.stats['fell_back_to_rest']} triangle pairs); the rest pose"
-                   f"{', turned,' if turned else ''} is written instead", err=True)
+    for line in fallback_warnings(rig, result):
+        click.echo(line, err=True)
     console.print("\n".join(f"  {label}: {path}" for label, path in written))
     if failed:
         sys.exit(EXIT_WRITE_FAILED)
@@ -335,15 +345,6 @@ def _announce(console, quiet: bool):
         if event == "start" and not quiet:
             console.print(f"  {name} ...", highlight=False)
     return listen
-
-
-def _check_bones_early(settings, model, skeleton) -> None:
-    """--fix, --free and --limit against a TGF skeleton before the (long) rig preparation."""
-    from ..files.meshes import read_tgf
-
-    tgf = Path(skeleton) if skeleton else Path(model).with_suffix(".tgf")
-    if tgf.suffix.lower() == ".tgf" and tgf.is_file() and not str(model).startswith("demo:"):
-        settings.check_bones(len(read_tgf(tgf)[1]))
 
 
 def _slice_choice(rig, result, count, console, profile, frame, quiet=False, choice=None):
@@ -375,18 +376,6 @@ def _slice_choice(rig, result, count, console, profile, frame, quiet=False, choi
             click.echo(f"supportless: error: slicing the answers failed: {exc}", err=True)
             sys.exit(EXIT_MISSING_TOOL)
     return result, bool(count)
-
-
-def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
-    """One line per answer weighed, and who chose."""
-    for i, c in enumerate(choice.candidates):
-        sliced = "" if c.sliced_mm is None else f", {label} {c.sliced_mm:.0f} mm"
-        mark = ("  <- chosen" if i == choice.chosen else "") + \
-            ("" if c.same_as is None else f"  (prints as answer {c.same_as + 1})")
-        console.print(f"  {i + 1}. {c.kind:<13} predicted {c.predicted_mm:6.0f} mm{sliced}{mark}")
-    who = label if choice.by == "slicer" else "the slicer model" + \
-        ("" if slicer_tried else f" ({label} not found or not asked for: nothing sliced)")
-    console.print(f"  chosen by {who}: {choice.reason}")
 
 
 def _print_results(console, report, verbose=False):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import sys
+from pathlib import Path
 
 import click
 
@@ -303,9 +304,16 @@ def _require_slicer(option: str, choice=None) -> None:
 
 
 def _contact_line(report: dict) -> str:
-    """One line: the skinning that posed the answer, and its contacts merged as written."""
+    """Lines: the best answer printed standing beside the answer (when it is another), the skinning that posed
+    the answer, and its contacts merged as written."""
     contacts = report.get("contacts") or []
-    line = f"posed by {report.get('skinning', 'linear blend skinning')}"
+    line = ""
+    standing = report.get("standing")
+    if standing and not standing["is_answer"] and standing["answer_turned_deg"] >= 1.0:  # the answer is turned
+        line = (f"standing as displayed: {standing['standing_g']:.1f} g of support ({standing['source']}); the "
+                f"answer, turned {standing['answer_turned_deg']:.0f}° to print: {standing['answer_g']:.1f} g "
+                "(--standing-out writes the standing one)\n")
+    line += f"posed by {report.get('skinning', 'linear blend skinning')}"
     between = sorted((c for c in contacts if c["parts"][0] != c["parts"][1]), key=lambda c: -c["pairs"])
     if contacts:
         named = [f"{c['parts'][0].split(':')[-1]} with {c['parts'][1].split(':')[-1]}" for c in between[:4]]
@@ -313,3 +321,24 @@ def _contact_line(report: dict) -> str:
         line += (f"; {contacts[0]['overlap_mm3']:,.0f} mm³ of contact merged into one solid as written ("
                  + ", ".join(named) + (f" and {more} more" if more > 0 else "") + ")")
     return line
+
+
+def _check_bones_early(settings, model, skeleton) -> None:
+    """--fix, --free and --limit against a TGF skeleton before the (long) rig preparation."""
+    from ..files.meshes import read_tgf
+
+    tgf = Path(skeleton) if skeleton else Path(model).with_suffix(".tgf")
+    if tgf.suffix.lower() == ".tgf" and tgf.is_file() and not str(model).startswith("demo:"):
+        settings.check_bones(len(read_tgf(tgf)[1]))
+
+
+def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
+    """One line per answer weighed, and who chose."""
+    for i, c in enumerate(choice.candidates):
+        sliced = "" if c.sliced_mm is None else f", {label} {c.sliced_mm:.0f} mm"
+        mark = ("  <- chosen" if i == choice.chosen else "") + \
+            ("" if c.same_as is None else f"  (prints as answer {c.same_as + 1})")
+        console.print(f"  {i + 1}. {c.kind:<13} predicted {c.predicted_mm:6.0f} mm{sliced}{mark}")
+    who = label if choice.by == "slicer" else "the slicer model" + \
+        ("" if slicer_tried else f" ({label} not found or not asked for: nothing sliced)")
+    console.print(f"  chosen by {who}: {choice.reason}")

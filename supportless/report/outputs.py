@@ -17,6 +17,7 @@ from ..base.progress import step
 from ..files.gltf import is_gltf, posed_joint_transforms, write_posed_gltf
 from ..files.meshes import write_json, write_mesh
 from ..files.printbody import united_surface
+from ..search.result import at_full_resolution
 from ..files.posefile import write_pose
 from ..files.printframe import PrintFrame
 from .report import write_pictures
@@ -73,7 +74,7 @@ def pictures_step(folder, rig, result, report) -> list[tuple[str, str]]:
 
 
 def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, upright=None, pose=None,
-                 pictures=None, report_path=None) -> tuple[list[tuple[str, str]], list[tuple[str, OSError]]]:
+                 pictures=None, report_path=None, standing=None) -> tuple[list[tuple[str, str]], list[tuple[str, OSError]]]:
     """Write the files of ``result`` that are asked for; a file that cannot be written does not stop the others.
 
     Parameters
@@ -87,6 +88,9 @@ def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, u
     output, upright, pose, pictures, report_path : path, optional
         The posed mesh as printed, the posed mesh standing, the pose file, the
         pictures' folder and the report; ``None`` skips one.
+    standing : path, optional
+        The best answer printed standing (``report["standing"]``, :func:`supportless.report.report.standing_answer`),
+        as it stands; the answer itself when it is that one or the search weighed no others.
 
     Returns
     -------
@@ -99,6 +103,14 @@ def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, u
         with step(f"writing {os.path.basename(path)}"):
             kind = write_posed(path, rig, result.angles, result.vertices, vertices, frame)
         return [(f"posed {kind.replace('as printed', 'standing') if standing_label else kind}", path)]
+
+    def posed_standing(path):
+        info = report.get("standing")
+        answer = result if not info or info["is_answer"] else \
+            at_full_resolution(rig, result.choice.candidates[info["index"]].result)
+        with step(f"writing {os.path.basename(path)}"):
+            kind = write_posed(path, rig, answer.angles, answer.vertices, answer.vertices, frame)
+        return [(f"best standing answer: {kind}", path)]
 
     def pose_file():
         extra = {"objective": result.value, "print_frame": frame.to_dict()}
@@ -114,6 +126,7 @@ def write_result(rig, result, report: dict, frame: PrintFrame, *, output=None, u
     steps: list[tuple[object, Callable[[], list]]] = [
         (output, lambda: posed(output, result.print_vertices)),
         (upright, lambda: posed(upright, result.vertices, standing_label=True)),
+        (standing, lambda: posed_standing(standing)),
         (pose, pose_file), (pictures, lambda: pictures_step(pictures, rig, result, report)),
         (report_path, report_file)]
     written, failed = [], []

@@ -252,9 +252,36 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
     }
     report["contacts"] = contact_summary(rig, result, frame)
+    report["rest_instead"] = result.stats.get("rest_instead")  # why the rest pose was written, when it was
+    report["standing"] = standing_answer(result)
     report["skinning"] = skinning_label(rig)
     report["support"] = support_headline(report)
     return report
+
+
+def standing_answer(result) -> dict | None:
+    """The best answer printed standing, beside the one handed back (:func:`supportless.search.choice.best_standing`).
+
+    Returns
+    -------
+    standing : dict or None
+        ``standing_mm``/``standing_g`` (its support filament: sliced when the choice sliced it, else
+        predicted), ``answer_mm``/``answer_g`` (the answer's, alike), ``answer_turned_deg`` (how far the answer
+        is turned from standing), ``is_answer`` (the answer is that standing one) and ``source``; None when the
+        search weighed no answers.
+    """
+    from ..search.choice import best_standing
+
+    choice = result.choice
+    if choice is None or (i := best_standing(choice)) is None:
+        return None
+    pick, chosen = choice.candidates[i], choice.candidates[choice.chosen]
+    sliced = pick.sliced_mm is not None and chosen.sliced_mm is not None
+    mm = [c.sliced_mm if sliced else c.predicted_mm for c in (pick, chosen)]
+    grams = [mm_to_cm3(v, FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY for v in mm]
+    return {"standing_mm": float(mm[0]), "standing_g": float(grams[0]), "answer_mm": float(mm[1]),
+            "answer_g": float(grams[1]), "answer_turned_deg": float(rotation_axis_angle(result.rotation)[1]),
+            "is_answer": i == choice.chosen, "source": "sliced" if sliced else "predicted", "index": int(i)}
 
 
 def skinning_label(rig) -> str:

@@ -359,6 +359,18 @@ def crosses_as_written(rig: Rig, result: PoseResult, rest_pairs: int) -> bool:
     return not written_verdict(rig, result, rest_pairs).allowed
 
 
+def best_standing(choice: Choice) -> int | None:
+    """The position in ``choice.candidates`` of the best answer printed as it stands (a ``"pose"`` answer, or the
+    chosen one when the search kept it upright): least sliced support when every such answer was sliced, else
+    least predicted; None when there is none."""
+    standing = [i for i, c in enumerate(choice.candidates)
+                if c.kind == "pose" or (i == choice.chosen and np.allclose(c.result.rotation, np.eye(len(c.result.rotation))))]
+    if not standing:
+        return None
+    sliced = all(choice.candidates[i].sliced_mm is not None for i in standing)
+    return min(standing, key=lambda i: choice.candidates[i].sliced_mm if sliced else choice.candidates[i].predicted_mm)
+
+
 def with_choice(result: PoseResult, choice: Choice) -> PoseResult:
     """``result`` carrying ``choice`` (and a ``chosen_kind`` stat)."""
     kind = choice.candidates[choice.chosen].kind

@@ -569,3 +569,33 @@ def test_the_symmetry_and_anatomy_options_reach_the_search(branch_files, tmp_pat
         assert report["symmetry"]["kept"] in ("mirrored", "free") and report["symmetry"]["mirrored_mm"] >= 0
         symmetric = report["symmetry"]["kept"] == "mirrored"
     assert report["settings"]["symmetric"] is symmetric
+
+
+def test_an_answer_the_slicer_finds_worse_than_the_rest_pose_is_replaced_by_it(branch_files, tmp_path):
+    """A stand-in PrusaSlicer that supports anything but the rest pose (exactly 60 mm tall) with 1000 mm more."""
+    from slicers import fake_exe, stand_in_slicer
+
+    exe = fake_exe(tmp_path, "prusa-slicer", stand_in_slicer(
+        "10.0 if abs(float(rec['v'][:, :, 2].max()) - 60.0) < 1e-3 else 1010.0"))
+    out = tmp_path / "posed.stl"
+    result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 8,
+                 "--iterations", 3, "--orient", "keep", "-o", out, "--report", tmp_path / "report.json",
+                 "--slice-check", env={"SUPPORTLESS_PRUSA_SLICER": exe})
+    assert result.exit_code == 0, (result.output, result.exception)
+    assert "needs more support than the rest pose; the rest pose is written instead" in result.stderr
+    report = json.loads((tmp_path / "report.json").read_text())
+    assert report["rest_instead"] and report["largest_rotation_deg"] == 0.0
+    assert report["slice_check"]["after"]["support_mm"] == report["slice_check"]["before"]["support_mm"]
+    V, _ = sl.read_mesh(out)
+    assert np.ptp(V[:, 2]) == pytest.approx(60.0, abs=1e-3)
+
+
+def test_the_rest_guard_reads_the_slicer_and_the_prediction():
+    from supportless.apps.rest_guard import predicted_worse, sliced_worse
+
+    assert predicted_worse({"predicted_slicer": {"before_mm": 10.0, "after_mm": 11.0}})
+    assert not predicted_worse({"predicted_slicer": {"before_mm": 10.0, "after_mm": 9.0}})
+    assert not predicted_worse({"predicted_slicer": None})
+    assert sliced_worse({"slice_check": {"before": {"support_mm": 5.0}, "after": {"support_mm": 6.0}}})
+    assert not sliced_worse({"slice_check": {"before": {"support_mm": 5.0}, "after": {"support_mm": 5.0}}})
+    assert not sliced_worse({})
