@@ -259,6 +259,16 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     return report
 
 
+def _contact_title(report: dict | None) -> str:
+    """" (arms resting on the chest: 6 mm³ merged)" for a found pose with contact, else ""."""
+    contacts = [c for c in (report or {}).get("contacts") or [] if c["parts"][0] != c["parts"][1]]
+    if not contacts:
+        return ""
+    named = ", ".join(f"{c['parts'][0].split(':')[-1]}–{c['parts'][1].split(':')[-1]}" for c in contacts[:3])
+    more = f" +{len(contacts) - 3}" if len(contacts) > 3 else ""
+    return f"\ncontact merged as written: {named}{more} ({report['contacts'][0]['overlap_mm3']:.0f} mm³)"
+
+
 def standing_answer(result) -> dict | None:
     """The best answer printed standing, beside the one handed back (:func:`supportless.search.choice.best_standing`).
 
@@ -304,8 +314,6 @@ def contact_summary(rig, result, frame: PrintFrame) -> list[dict]:
     regions = result.stats.get("contacts") or []
     if not regions or rig.dim != 3:
         return []
-    from ..energies.intersection import self_intersection_volume
-
     names = rig.bone_names()
     overlap = float(self_intersection_volume(result.print_vertices, rig.faces, rig.up)) * frame.scale ** 3
     return [{"parts": [names[r["bones"][0]], names[r["bones"][1]]], "pairs": int(r["pairs"]),
@@ -439,7 +447,7 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
         before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
         before_risky=risky_faces(rest, rig.faces, rig.up, angle) if risky else None,
         after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
-        titles=("rest pose", "found pose"),
+        titles=("rest pose", "found pose" + _contact_title(report)),
         before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
         suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:.3g} deg); "
                  "green = support polygon, ring = centre of mass")

@@ -462,6 +462,7 @@ def test_the_front_slider_sets_the_pose_and_rotation(tpose_rig, tmp_path):
     from supportless.apps.ui.front import FrontBrowser
 
     state = EditorState(tpose_rig, settings=SearchSettings(particles=24, iterations=8, seed=3), workdir=tmp_path)
+    state.history.merge_seconds = 0.0  # each show its own undo step, however fast the shows follow each other
     seen = _events(state)
     browser = FrontBrowser(state)
     with pytest.raises(ValueError, match="no front yet"):

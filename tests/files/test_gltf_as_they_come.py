@@ -180,8 +180,13 @@ def test_overlapping_open_clothing_and_joint_caps_run_and_write_no_crossing(tmp_
     rig = load(path, cache)
     assert intersecting_face_pairs(rig.vertices, rig.faces) == 0
     result = sl.optimize(rig, particles=8, iterations=3, seed=0)
-    assert result.stats["rest_pairs"] == 0 and result.stats["written_pairs"] == 0
-    assert intersecting_face_pairs(result.print_vertices, rig.faces) == 0
+    # the posed surface crosses itself only where jointed parts press together, and is written as one clean solid
+    assert result.stats["rest_pairs"] == 0
+    assert result.stats["written_pairs"] == 0 or result.stats["contacts"]
+    from supportless.files.printbody import united_surface
+
+    U, G, _ = united_surface(result.print_vertices, rig.faces)
+    assert intersecting_face_pairs(U, G) == 0
 
 
 def test_a_vertex_with_no_weight_takes_its_neighbours_not_an_unweighted_root(tmp_path, cache):
