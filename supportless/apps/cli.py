@@ -174,7 +174,7 @@ def _summary_table(report: dict, verbose: bool = False):
         return "n/a (2D)" if x is None or x < 0 else str(x)
 
     table.add_row("intersecting face pairs (exact)", pairs(b.get("intersecting_face_pairs")),
-                  pairs(a.get("intersecting_face_pairs")), "")
+                  pairs(a.get("intersecting_face_pairs")), "contact: one solid as written" if report.get("contacts") else "")
     table.add_row("new contacts with the plate", str(b["new_contact_vertices"]), str(a["new_contact_vertices"]), "")
     table.add_row("stability margin (of the height)", f"{100 * b['stability_margin']:.1f} %",
                   f"{100 * a['stability_margin']:.1f} %", _standing_word(b, a))

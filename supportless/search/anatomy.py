@@ -119,13 +119,22 @@ _STEMS = {
     "upleg": "thigh", "upperleg": "thigh", "thigh": "thigh",
     "leg": "shin", "lowerleg": "shin", "lowleg": "shin", "calf": "shin", "shin": "shin",
     "foot": "foot", "ankle": "foot", "toebase": "toe", "toe": "toe", "toes": "toe", "ball": "toe",
+    # DAZ's bend and twist bones, and its spine's halves
+    "shldrbend": "upper_arm", "shldr": "upper_arm", "forearmbend": "forearm", "thighbend": "thigh",
+    "abdomenlower": "spine", "abdomenupper": "spine", "chestlower": "spine", "chestupper": "spine",
 }
 
 #: Humanoid parts as a four-legged animal's: the front legs are its arms, the hind legs its legs.
 _AS_QUADRUPED = {"upper_arm": ("front", "upper_leg"), "forearm": ("front", "lower_leg"), "hand": ("front", "paw"),
                  "thigh": ("back", "upper_leg"), "shin": ("back", "lower_leg"), "foot": ("back", "paw")}
 
-_PREFIXES = ("mixamorig", "def-", "org-", "mch-", "j_bip_", "b_", "bip01", "bip001", "cc_base_")
+_PREFIXES = ("mixamorig", "def-", "org-", "mch-", "j_bip_", "b_", "valvebiped.", "bip01", "bip001", "cc_base_")
+
+#: A HumanIK/MotionBuilder character's prefix (``Character1_LeftArm``).
+_HUMANIK = re.compile(r"(?i)^character\d*_")
+
+#: DAZ's side letter, lower case before a capitalised part (``lShldrBend``, ``rThighTwist``).
+_DAZ_SIDE = re.compile(r"^([lr])(?=[A-Z])")
 
 
 def bone_part(name: str) -> tuple[str | None, str | None, str | None, str]:
@@ -166,10 +175,20 @@ def bone_part(name: str) -> tuple[str | None, str | None, str | None, str]:
     for prefix in _PREFIXES:
         if low.startswith(prefix):
             text, low = text[len(prefix):], low[len(prefix):]
+            convention = convention or ("3ds Max Biped" if prefix.startswith("bip") else "")
+            text = text.lstrip(" _.:-")  # 3ds Max Biped's "Bip01 L UpperArm", Valve's "Bip01_L_UpperArm"
+            low = text.lower()
+    text = _HUMANIK.sub("", text)
+    daz = _DAZ_SIDE.match(text)
+    if daz and not convention:
+        convention = "DAZ"
     text = re.sub(r"[._]\d+$", "", text)  # Blender's .001, an exporter's _06
     text = re.sub(r"(?i)^c[._ ](?=[a-z])", "", text)  # VRoid's centre bones: J_Bip_C_Head
     side = None
-    match = re.search(r"(?i)[._ ]([lr])$", text) or re.search(r"(?i)^([lr])[._ ]", text)
+    if daz:
+        side = "left" if daz.group(1) == "l" else "right"
+        text = text[1:]
+    match = None if daz else (re.search(r"(?i)[._ ]([lr])$", text) or re.search(r"(?i)^([lr])[._ ]", text))
     if match:
         side = "left" if match.group(1).lower() == "l" else "right"
         text = text[:match.start()] + text[match.end():]
@@ -183,7 +202,7 @@ def bone_part(name: str) -> tuple[str | None, str | None, str | None, str]:
     stem = re.sub(r"[^a-z]", "", text.lower())
     group = None
     for word, g in (("front", "front"), ("fore", "front"), ("back", "back"), ("hind", "back"), ("rear", "back")):
-        if stem.startswith(word) and len(stem) > len(word) and stem != "forearm":
+        if stem.startswith(word) and len(stem) > len(word) and not stem.startswith("forearm"):
             group, stem = g, stem[len(word):]
             break
     stem = stem.rstrip("s") if stem not in _STEMS and stem.rstrip("s") in _STEMS else stem

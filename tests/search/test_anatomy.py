@@ -187,3 +187,26 @@ def test_a_named_figure_ranges_its_neck_and_head_and_bounds_its_head(tpose_rig, 
     nod[[NECK, NECK + 1], 0] = np.radians(20.0)  # each joint well within its range, the head 40 degrees down
     assert ranges.excess(rig.transforms(nod)) == pytest.approx(0.0)
     assert objective.terms(nod)["violation"] == pytest.approx(np.radians(15.0))
+
+
+@pytest.mark.parametrize("name, part, side, convention", [
+    ("Bip01 L UpperArm", "upper_arm", "left", "3ds Max Biped"),   # 3ds Max Biped
+    ("Bip001 R Forearm", "forearm", "right", "3ds Max Biped"),
+    ("Bip01 Head", "head", None, "3ds Max Biped"),
+    ("ValveBiped.Bip01_R_Thigh", "thigh", "right", "3ds Max Biped"),  # Source engine
+    ("Character1_LeftArm", "upper_arm", "left", "Left/Right"),      # HumanIK / MotionBuilder
+    ("Character1_Neck", "neck", None, "plain"),
+    ("lShldrBend", "upper_arm", "left", "DAZ"),                     # DAZ Genesis
+    ("rForearmBend", "forearm", "right", "DAZ"),
+    ("lCollar", "shoulder", "left", "DAZ"),
+    ("rThighBend", "thigh", "right", "DAZ"),
+    ("chestUpper", "spine", None, "plain"),
+])
+def test_more_naming_schemes_name_their_limbs(name, part, side, convention):
+    assert bone_part(name)[:2] == (part, side)
+    assert bone_part(name)[3] == convention
+
+
+@pytest.mark.parametrize("name", ["Root", "RigRoot", "LowerBody", "Ribbon", "lShldrTwist"])
+def test_names_that_only_look_like_a_side_letter_are_not_limbs(name):
+    assert bone_part(name)[0] not in ("upper_arm", "forearm", "thigh", "shin")
