@@ -264,8 +264,11 @@ def _contact_title(report: dict | None) -> str:
     contacts = [c for c in (report or {}).get("contacts") or [] if c["parts"][0] != c["parts"][1]]
     if not contacts:
         return ""
-    named = ", ".join(f"{c['parts'][0].split(':')[-1]}–{c['parts'][1].split(':')[-1]}" for c in contacts[:3])
-    more = f" +{len(contacts) - 3}" if len(contacts) > 3 else ""
+    def short(name):
+        return name.split(":")[-1].split(" (")[0]
+
+    named = ", ".join(f"{short(c['parts'][0])}–{short(c['parts'][1])}" for c in contacts[:2])
+    more = f" and {len(contacts) - 2} more" if len(contacts) > 2 else ""
     return f"\ncontact merged as written: {named}{more} ({report['contacts'][0]['overlap_mm3']:.0f} mm³)"
 
 

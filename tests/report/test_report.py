@@ -168,3 +168,31 @@ def test_the_report_gives_the_naturalness_of_the_pose(branch_rig, searched):
     n = build_report(branch_rig, searched)["naturalness"]
     assert n["largest_chain_turn_deg"] == pytest.approx(world_turn_deg(branch_rig, searched.angles)[n["chain_end"] - 1])
     assert 0.0 <= n["largest_chain_turn_deg"] <= n["largest_joint_deg"] <= 180.0
+
+
+def test_the_best_standing_answer_is_reported_and_written_beside_a_turned_one(branch_rig, tmp_path):
+    """With the print orientation free, the report gives the best answer printed as it stands beside the answer,
+    and --standing-out writes that one standing: +Z up, on the plate, untouched by the print rotation."""
+    from supportless.files.printframe import rig_print_frame
+    from supportless.report.outputs import write_result
+    from supportless.search.choice import best_standing
+
+    found = sl.optimize(branch_rig, particles=10, iterations=4, seed=2)
+    report = build_report(branch_rig, found)
+    standing = report["standing"]
+    assert standing is not None and found.choice is not None
+    index = best_standing(found.choice)
+    assert standing["index"] == index and standing["is_answer"] == (index == found.choice.chosen)
+    pick = found.choice.candidates[index]
+    assert pick.kind == "pose" or np.allclose(pick.result.rotation, np.eye(3))
+    others = [c.predicted_mm for c in found.choice.candidates
+              if c.kind == "pose" or np.allclose(c.result.rotation, np.eye(3))]
+    assert standing["standing_mm"] == pytest.approx(min(others))
+    assert standing["answer_turned_deg"] >= 0.0
+    frame = rig_print_frame(branch_rig)
+    written, failed = write_result(branch_rig, found, report, frame, standing=tmp_path / "standing.stl")
+    assert not failed and written[0][1] == tmp_path / "standing.stl"
+    V, _ = sl.read_mesh(tmp_path / "standing.stl")  # an STL's vertices come back merged, in another order
+    expected = frame.place(pick.result.vertices if not standing["is_answer"] else found.vertices)
+    np.testing.assert_allclose(np.sort(V, axis=0), np.sort(expected, axis=0), atol=1e-3)
+    assert V[:, 2].min() == pytest.approx(0.0, abs=1e-5)
