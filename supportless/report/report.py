@@ -265,7 +265,8 @@ def _contact_title(report: dict | None) -> str:
     if not contacts:
         return ""
     def short(name):
-        return name.split(":")[-1].split(" (")[0]
+        name = name.split(":")[-1].split(" (")[0]
+        return name if len(name) <= 18 else name[:17] + "…"
 
     named = ", ".join(f"{short(c['parts'][0])}–{short(c['parts'][1])}" for c in contacts[:2])
     more = f" and {len(contacts) - 2} more" if len(contacts) > 2 else ""
