@@ -63,6 +63,8 @@ def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.n
         placed, faces, merged = united_surface(placed, faces)
         if merged["pairs"]:
             united = f", one solid ({merged['how']}: {merged['pairs']} crossing pairs merged)"
+            vertical = 1 if is_gltf(path) else 2  # a remeshed solid's lowest point back on the plate
+            placed[:, vertical] -= placed[:, vertical].min()
     write_mesh(path, placed, faces)
     return ("mesh, as printed" if vertices is not standing else "mesh") + united
 

@@ -118,3 +118,25 @@ def test_a_surface_that_does_not_cross_itself_is_written_as_it_is(tpose_rig):
     U, G, merged = united_surface(tpose_rig.vertices, tpose_rig.faces)
     assert merged["pairs"] == 0 and merged["how"] == "none"
     assert np.array_equal(U, tpose_rig.vertices) and np.array_equal(G, tpose_rig.faces)
+
+
+def test_a_united_file_is_written_on_the_plate(tpose_rig, tmp_path, monkeypatch):
+    """The written file of a pose with contact is one solid; a remeshed one (lifted here) is put back on the plate."""
+    from supportless.base.geometry import place_on_plate
+    from supportless.files.printframe import rig_print_frame
+    from supportless.report import outputs
+
+    A = turned(tpose_rig, ARM_DOWN)
+    V = place_on_plate(tpose_rig.pose(A), tpose_rig.up)
+    real = outputs.united_surface
+
+    def lifted(P, F):
+        U, G, merged = real(P, F)
+        return U + np.array([0.0, 0.0, 0.5]), G, merged
+
+    monkeypatch.setattr(outputs, "united_surface", lifted)
+    kind = outputs.write_posed(tmp_path / "posed.stl", tpose_rig, A, V, V, rig_print_frame(tpose_rig))
+    assert "one solid (exact self-union" in kind
+    W, G = sl.read_mesh(tmp_path / "posed.stl")
+    assert W[:, 2].min() == pytest.approx(0.0, abs=1e-6)
+    assert len(intersecting_faces(W, G)) == 0
