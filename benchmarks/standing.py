@@ -152,7 +152,7 @@ def main(argv=None) -> int:
     text = table(rows, "python benchmarks/" + " ".join([Path(__file__).name, *(argv or sys.argv[1:])]))
     print(text)
     if args.out:
-        write_section(args.out, HEADING, text)
+        write_section(args.out, HEADING, f"{HEADING}\n\n{text}")
     return 0
 
 
