@@ -259,7 +259,7 @@ class Rig:
         return abs(float(signed_volume(self.vertices, self.faces)))
 
     def crossings(self, vertices: np.ndarray, posed_joints: np.ndarray, rules: ContactRules | None = None,
-                  overlap_volume: float | None = None, first_only: bool = False) -> ContactVerdict:
+                  overlap_volume: float | None = None) -> ContactVerdict:
         """Whether a posed surface's crossings are all contact between jointed parts (:mod:`~supportless.rig.contact`).
 
         Parameters
@@ -272,8 +272,6 @@ class Rig:
             None: no contact allowed (any crossing refuses the pose).
         overlap_volume : float, optional
             The volume it covers twice (the ray grid's), bounded by ``rules.volume`` of :attr:`rest_volume`.
-        first_only : bool
-            With no contact allowed, stop at the first crossing (the verdict's ``pairs`` is then 0 or 1).
 
         Returns
         -------
@@ -283,9 +281,6 @@ class Rig:
         if self.dim != 3:
             return ContactVerdict(True, 0)
         rules = rules if rules is not None else ContactRules(hops=-1)
-        if not rules.allows_contact and first_only:
-            crossing = self_intersects(vertices, self.faces)
-            return ContactVerdict(not crossing, int(crossing), "the surface crosses itself" if crossing else "")
         from ..copyleft.cgal import intersecting_faces
 
         return contact_verdict(self.body_parts, vertices, posed_joints, intersecting_faces(vertices, self.faces),
