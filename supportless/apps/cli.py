@@ -294,6 +294,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if slice_check_flag and rig.dim != 3:
         _fail(f"{model}: --slice-check slices 3D models only; this one is planar")
     _say_frame(rig, frame, quiet)
+    settings = settings.replace(print_height_mm=frame.height_mm)  # the plate contact is judged at the printed size
     with deferred_interrupt(), listening(_announce(console, quiet)):  # Ctrl-C stops the search; what it found is still written
         front = _run_front(rig, console, settings, pareto_count, pareto_method, quiet) if pareto_count else None
         result = front.default if front else _run_search(rig, console, settings, quiet)

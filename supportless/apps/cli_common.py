@@ -202,6 +202,10 @@ def _search_options(f):
         click.option("--orient", type=click.Choice(["free", "keep"]), default=d.orient, show_default=True,
                      help="free: choose the print orientation with the pose (-o is written turned); "
                           "keep: print the model as it stands."),
+        click.option("--min-footprint", "footprint_mm2", type=click.FloatRange(*RANGES["footprint_mm2"]),
+                     default=d.footprint_mm2, show_default=True,
+                     help="With --orient free, the least area a turned print's first layer rests on, mm² at the "
+                          "printed size: a turn onto a tip or an edge is refused (0: no such rule)."),
         click.option("--limit", "limits", multiple=True,
                      help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
         click.option("--anatomy/--no-anatomy", default=d.anatomy, show_default=True,

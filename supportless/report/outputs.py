@@ -15,11 +15,13 @@ import numpy as np
 
 from ..base.progress import step
 from ..files.gltf import is_gltf, posed_joint_transforms, write_posed_gltf
-from ..files.meshes import write_json, write_mesh
+from ..files.meshes import read_mesh, write_json, write_mesh
+from ..copyleft.cgal import intersecting_faces
 from ..files.printbody import united_surface
 from ..search.result import at_full_resolution
 from ..files.posefile import write_pose
 from ..files.printframe import PrintFrame
+from ..files.watertight import apart_by_a_hair, manifold_check
 from .report import write_pictures
 
 __all__ = ["pictures_step", "write_posed", "write_result"]
@@ -65,8 +67,24 @@ def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.n
             united = f", one solid ({merged['how']}: {merged['pairs']} crossing pairs merged)"
             vertical = 1 if is_gltf(path) else 2  # a remeshed solid's lowest point back on the plate
             placed[:, vertical] -= placed[:, vertical].min()
+    if rig.dim == 3:  # parts that touch along an edge or at a corner: each part's corner a hair onto its side
+        apart, moved = apart_by_a_hair(placed, faces)
+        if moved and len(intersecting_faces(apart, faces)) <= len(intersecting_faces(placed, faces)):
+            placed = apart
+            united += f", {moved} corners shared by touching parts moved apart by a hair"
     write_mesh(path, placed, faces)
-    return ("mesh, as printed" if vertices is not standing else "mesh") + united
+    return ("mesh, as printed" if vertices is not standing else "mesh") + united + (
+        _as_read(path) if rig.dim == 3 else "")
+
+
+def _as_read(path) -> str:
+    """``""`` when the written file reads back closed (every edge in two triangles), else a warning clause."""
+    V, F = read_mesh(path)
+    found = manifold_check(V, F, np.float64)  # read_mesh welds the file's corners as they are stored
+    if found["closed"]:
+        return ""
+    return (f"; warning: read back, {found['open_edges']} edges are in one triangle and {found['shared_edges']} in "
+            "more than two (not a closed solid)")
 
 
 def pictures_step(folder, rig, result, report) -> list[tuple[str, str]]:

@@ -28,6 +28,7 @@ import numpy as np
 from ..base.geometry import place_on_plate
 from ..copyleft.cgal import intersecting_faces
 from ..energies.slicer_model import predicted_support_mm
+from ..energies.footprint import footprint_area
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
@@ -79,6 +80,9 @@ class Candidate:
         The earlier answer (of another kind) this one prints like (within
         :data:`SAME_DEGREES`, :func:`print_distance_deg`), e.g. the pose
         phase's best when the search kept it upright.
+    footprint_mm2 : float or None
+        The first layer's contact with the plate at ``Choice.height_mm``, mm²
+        (:func:`~supportless.energies.footprint.footprint_area`).
     """
 
     kind: str
@@ -86,6 +90,12 @@ class Candidate:
     predicted_mm: float
     sliced_mm: float | None = None
     same_as: int | None = None
+    footprint_mm2: float | None = None
+
+    @property
+    def turned(self) -> bool:
+        """Whether the answer prints turned from how the model stands."""
+        return bool(not np.allclose(self.result.rotation, np.eye(len(self.result.rotation))))
 
 
 @dataclass
@@ -144,7 +154,8 @@ class Choice:
                 "terms": {k: float(v) for k, v in c.result.terms.items()},
                 "predicted_mm": round(c.predicted_mm, 1),
                 "sliced_mm": None if c.sliced_mm is None else round(c.sliced_mm, 1),
-                "turned": bool(not np.allclose(c.result.rotation, np.eye(len(c.result.rotation)))),
+                "turned": c.turned,
+                "footprint_mm2": None if c.footprint_mm2 is None else round(c.footprint_mm2, 1),
                 "up": np.round(c.result.rotation.T @ self.up, 3).tolist(),
                 "same_as": None if c.same_as is None else c.same_as + 1,
                 "distance_deg": round(pose_distance_deg(c.result.angles, c.result.rotation, chosen.angles,
@@ -254,7 +265,9 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     predicted = np.concatenate([np.atleast_1d(predicted_support_mm(np.stack(surfaces[i:i + chunk]), rig.faces, up,
                                                                    float(result.settings.overhang_angle), scale))
                                 for i in range(0, len(surfaces), chunk)])
-    candidates = [Candidate(kind, r, float(p), same_as=j) for (kind, r, j), p in zip(picked, predicted[1:])]
+    candidates = [Candidate(kind, r, float(p), same_as=j, footprint_mm2=float(footprint_area(
+        r.print_vertices, rig.faces, up, scale)) if rig.dim == 3 else None) for (kind, r, j), p in zip(picked, predicted[1:])]
+    candidates = resting_on_area(candidates, result.settings.footprint_mm2)
     # the turns with the least predicted support, and the one the search's objective likes best (the first)
     turns = [c for c in candidates if c.kind == "turn"]
     kept_turns = {id(c) for c in sorted(turns, key=lambda c: c.predicted_mm)[:per_kind]} | {id(c) for c in turns[:1]}
@@ -265,6 +278,26 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
         if c.same_as is not None:
             c.same_as = position.get(id(candidates[c.same_as]))
     return kept, float(predicted[0])
+
+
+def resting_on_area(candidates: list[Candidate], bound_mm2: float) -> list[Candidate]:
+    """The candidates that rest on at least ``bound_mm2`` of plate, or print as the model stands.
+
+    A turn onto a tip or an edge is refused, as in the search
+    (:meth:`~supportless.search.objective.Objective.footprint_shortfall`): the search judged it on its proxy,
+    this on the full surface. When every candidate is such a turn, the one resting on the most is kept.
+    ``same_as`` is renumbered.
+    """
+    if not bound_mm2 or not candidates or candidates[0].footprint_mm2 is None:
+        return candidates
+    kept = [c for c in candidates if not c.turned or c.footprint_mm2 >= bound_mm2]
+    if not kept:
+        kept = [max(candidates, key=lambda c: c.footprint_mm2)]
+    position = {id(c): i for i, c in enumerate(kept)}
+    for c in kept:
+        if c.same_as is not None:
+            c.same_as = position.get(id(candidates[c.same_as]))
+    return kept
 
 
 def choose_by_model(predicted_mm: np.ndarray, values: np.ndarray, rest_mm: float,

@@ -32,6 +32,7 @@ import numpy as np
 from ..base.geometry import signed_volume
 from ..base.kinematics import lbs_operator, pruned_weights, skin
 from ..energies import arap as arap_mod
+from ..energies.footprint import footprint_area
 from ..energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
 from ..energies.overhang import overhang_energy
 from ..energies.slicer_model import predicted_support_mm
@@ -172,7 +173,8 @@ class Objective:
                  joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
                  volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0,
                  joint_ranges: JointRanges | None = None, contact: ContactRules | None = None, drops: ArmDrops | None = None,
-                 head_limit: float | None = None):
+                 head_limit: float | None = None, footprint_mm2: float | None = None,
+                 print_height_mm: float = REFERENCE_HEIGHT_MM):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")
         self.rig = rig
@@ -203,6 +205,8 @@ class Objective:
         self._heads = head_bones(rig) if head_limit is not None else np.zeros(0, np.int64)
         self.joint_ranges = joint_ranges
         self.contact = contact
+        self.footprint_mm2 = None if not footprint_mm2 else float(footprint_mm2)
+        self.print_height_mm = float(print_height_mm)
 
     # ------------------------------------------------------------ precompute
     @cached_property
@@ -337,6 +341,19 @@ class Objective:
             violation = violation + self.standing.violation(transforms, V)
         return violation
 
+    def footprint_shortfall(self, V: np.ndarray, rotations: np.ndarray | None) -> np.ndarray | float:
+        """How far turned bodies fall short of resting on :attr:`footprint_mm2` of plate: ``1 - area / bound``
+        where the first layer's contact (:func:`~supportless.energies.footprint.footprint_area`, at
+        :attr:`print_height_mm` tall) is under the bound, else 0; (P,) float64.
+
+        Only a turn is judged (``rotations`` given): the model as it stands rests as its maker made it.
+        """
+        if self.footprint_mm2 is None or rotations is None or self.rig.dim != 3:
+            return 0.0
+        turned = np.matmul(V, np.swapaxes(rotations, -1, -2))
+        area = footprint_area(turned, self.rig.faces, self.rig.up, self.print_height_mm / self.height)
+        return np.maximum(0.0, 1.0 - area / self.footprint_mm2)
+
     def prior_cost(self, angles: np.ndarray, transforms: np.ndarray) -> np.ndarray:
         """The natural-pose prior: the joints' own turns (:class:`PosePrior`), plus ``w_chain`` times the
         squared turn (radians) of each chain end in the world, summed: three joints turning one way cost
@@ -349,7 +366,8 @@ class Objective:
 
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
-        violation = self.prior.excess(angles) + self.posed_violation(transforms, V)
+        violation = (self.prior.excess(angles) + self.posed_violation(transforms, V)
+                     + self.footprint_shortfall(V, rotations))
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
                 "overhang": self.overhang(V, rotations), "prior": self.prior_cost(angles, transforms),
                 "violation": violation}
@@ -516,7 +534,8 @@ class Objective:
             kept[todo] += self.w_arap * (arap[todo] / self.volume)
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
-            violation = excess[todo] + self.posed_violation(transforms[todo], V[todo])
+            violation = (excess[todo] + self.posed_violation(transforms[todo], V[todo])
+                         + self.footprint_shortfall(V[todo], None if rotations is None else rotations[todo]))
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
                        "intersection": 0.0, "violation": violation}
             kept[todo] = self.combine(self.normalise(partial))
@@ -540,7 +559,7 @@ class Objective:
                 "chain_limit": self.chain_limit, "head_limit": self.head_limit, "w_chain": self.w_chain,
                 "joint_ranges": None if self.joint_ranges is None else self.joint_ranges.describe(),
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
-                "support_floor": self.support_floor,
+                "support_floor": self.support_floor, "footprint_mm2": self.footprint_mm2,
                 "contact": None if self.contact is None else dataclasses.asdict(self.contact)}
 
 

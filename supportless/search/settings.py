@@ -21,6 +21,7 @@ import numpy as np
 
 from ..base.errors import InputError
 from ..energies.raygrid import DEFAULT_RESOLUTION
+from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
 from ..rig.contact import ContactRules
@@ -61,6 +62,12 @@ CHAIN_LIMIT = 60.0
 #: on the zoo.
 HEAD_LIMIT = 25.0
 
+#: Least first-layer contact of a turned print, mm² at the printed size (:attr:`SearchSettings.footprint_mm2`):
+#: the section half a first layer over its lowest point (:func:`supportless.energies.footprint.footprint_area`).
+#: A turn that rests on less is refused. Chosen on the zoo and the shared characters: see benchmarks/RESULTS.md,
+#: "Resting on an area".
+FOOTPRINT_MM2 = 3.0
+
 #: Print-orientation modes (:attr:`SearchSettings.orient`).
 ORIENT_MODES = ("free", "keep")
 
@@ -84,6 +91,8 @@ RANGES = {
     "joint_limit": (0.0, 180.0),
     "chain_limit": (0.0, 180.0),
     "head_limit": (0.0, 180.0),
+    "footprint_mm2": (0.0, 10_000.0),
+    "print_height_mm": (0.01, 100_000.0),
     "overhang_angle": (0.0, 90.0),
     "overhang_margin": (0.0, 45.0),
     "w_arap": (0.0, None),
@@ -172,6 +181,12 @@ class SearchSettings:
         of an upright figure, :func:`supportless.search.naturalness.head_bones`)
         in the world from its rest direction, degrees: the same rule as
         ``chain_limit``, tighter; default :data:`HEAD_LIMIT`. None (or 180): no such rule.
+    footprint_mm2 : float
+        Least contact a turned print's first layer has with the plate, mm² at ``print_height_mm`` tall
+        (:meth:`supportless.search.objective.Objective.footprint_shortfall`); a turn resting on less (a tip, an
+        edge) is refused. Default :data:`FOOTPRINT_MM2`; 0: no such rule. The model as it stands is never judged.
+    print_height_mm : float
+        The printed height of the rest pose along up, mm (the print frame's), for ``footprint_mm2``.
     w_chain : float
         Weight of the chain ends' squared world turn (radians) in the
         natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
@@ -253,6 +268,8 @@ class SearchSettings:
     limits: tuple = ()
     chain_limit: float | None = CHAIN_LIMIT
     head_limit: float | None = HEAD_LIMIT
+    footprint_mm2: float = FOOTPRINT_MM2
+    print_height_mm: float = REFERENCE_HEIGHT_MM
     w_chain: float = W_CHAIN
     anatomy: bool = True
     contact: bool = True
@@ -297,6 +314,10 @@ class SearchSettings:
             raise InputError(None, f"chain_limit must be within 0..180 degrees, not {self.chain_limit}")
         if self.head_limit is not None and not _within(self.head_limit, RANGES["head_limit"]):
             raise InputError(None, f"head_limit must be within 0..180 degrees, not {self.head_limit}")
+        for name, unit in (("footprint_mm2", "mm²"), ("print_height_mm", "mm")):
+            if not _within(getattr(self, name), RANGES[name]):
+                low, high = RANGES[name]
+                raise InputError(None, f"{name} must be within {low:g}..{high:g} {unit}, not {getattr(self, name)}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
             try:
@@ -366,6 +387,7 @@ class SearchSettings:
                          arap_data=arap_data, w_prior=self.w_prior, joint_limits=self.joint_limits(rig),
                          keep_standing=self.keep_standing, support_floor=self.support_floor, volume=volume,
                          chain_limit=self.chain_limit, head_limit=self.head_limit, w_chain=self.w_chain,
+                         footprint_mm2=self.footprint_mm2, print_height_mm=self.print_height_mm,
                          joint_ranges=joint_ranges(rig) if self.anatomy else None,
                          contact=ContactRules() if self.contact else None,
                          drops=arm_drops(rig) if self.relaxed and self.anatomy else None)
@@ -390,6 +412,10 @@ class SearchSettings:
                                 np.int64)
                 if len(arms):
                     out[ranges.child[arms]] = np.maximum(out[ranges.child[arms]], np.degrees(ranges.swing[arms]))
+        for name, unit in (("footprint_mm2", "mm²"), ("print_height_mm", "mm")):
+            if not _within(getattr(self, name), RANGES[name]):
+                low, high = RANGES[name]
+                raise InputError(None, f"{name} must be within {low:g}..{high:g} {unit}, not {getattr(self, name)}")
         for item in self.limits:
             bone, _, value = item.partition("=")
             out[bone_index(bone, rig.bone_count, rig.labels)] = float(value)
