@@ -107,3 +107,21 @@ def test_an_answer_that_crosses_itself_as_written_is_passed_over_for_the_next(br
     predicted = [c.predicted_mm for i, c in enumerate(again.choice.candidates) if i != first]
     assert again.choice.candidates[again.choice.chosen].predicted_mm <= min(predicted) + \
         choice_mod.PREDICTION_TOLERANCE * again.choice.rest_mm + 1e-9
+
+
+def test_the_choice_refuses_turns_resting_on_less_than_the_bound():
+    from types import SimpleNamespace
+
+    from supportless.search.choice import Candidate, resting_on_area
+
+    turn = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+
+    def answer(rotation, footprint, same_as=None):
+        return Candidate("turn", SimpleNamespace(rotation=rotation), 100.0, same_as=same_as, footprint_mm2=footprint)
+
+    standing, tip, flat = answer(np.eye(3), 0.5), answer(turn, 1.0), answer(turn, 40.0, same_as=1)
+    kept = resting_on_area([standing, tip, flat], 3.0)
+    assert kept == [standing, flat]  # as it stands it rests as made; the tip is refused
+    assert flat.same_as is None  # it pointed at the refused one
+    assert resting_on_area([tip], 3.0) == [tip]  # nothing rests on enough: the one resting on the most is kept
+    assert resting_on_area([standing, tip], 0.0) == [standing, tip]  # the rule off

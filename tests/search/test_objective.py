@@ -289,3 +289,31 @@ def test_a_pose_past_a_joint_limit_is_not_measured_against_a_bound_that_keeps_th
     posed.clear()
     np.testing.assert_allclose(obj.bounded(A, np.full(24, np.inf)), exact, rtol=1e-3)
     assert posed == [24]
+
+
+def test_a_turn_resting_on_less_than_the_bound_breaks_a_rule_and_standing_as_made_never_does(tpose_rig):
+    """The footprint rule, against the first-layer section measured on its own."""
+    from supportless.energies.footprint import footprint_area
+    from supportless.search.orientation import rotation_between
+
+    rig = tpose_rig
+    rest = rig.rest_angles()[None]
+    V = rig.pose(rest[0])
+    on_back = rotation_between(np.array([0.0, 0.0, 1.0]), np.asarray(rig.up, float))[None]  # lying, face up
+    area = float(footprint_area(V @ on_back[0].T, rig.faces, rig.up, 60.0 / np.ptp(V @ rig.up)))
+    assert area > 0
+    strict = sl.Objective(rig, footprint_mm2=4 * area)
+    assert float(strict.footprint_shortfall(V[None], on_back)[0]) == pytest.approx(0.75)
+    assert strict.terms(rest, on_back)["violation"][0] >= 0.75
+    assert strict(rest, on_back)[0] > INFEASIBLE
+    lenient = sl.Objective(rig, footprint_mm2=area / 2)
+    assert lenient.terms(rest, on_back)["violation"][0] == 0
+    # as the model stands it is never judged, whatever the bound; nor with the rule off
+    assert strict.terms(rest)["violation"][0] == 0
+    assert sl.Objective(rig, footprint_mm2=0).terms(rest, on_back)["violation"][0] == 0
+    # the bound is at the printed size: twice as tall, the section (half a first layer up) in mm² of that size
+    taller = sl.Objective(rig, footprint_mm2=4 * area, print_height_mm=120.0)
+    area_120 = float(footprint_area(V @ on_back[0].T, rig.faces, rig.up, 120.0 / np.ptp(V @ rig.up)))
+    assert taller.terms(rest, on_back)["violation"][0] == pytest.approx(max(0.0, 1 - area_120 / (4 * area)))
+    # the search's bounded evaluation breaks the rule the same way
+    assert strict.bounded(rest, np.array([np.inf]), on_back)[0] > INFEASIBLE
