@@ -112,7 +112,8 @@ def main(argv=None):
         "",
         f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}. "
         f"Settings: {json.dumps(settings)}; defaults otherwise. "
-        "PrusaSlicer: its own default print settings, 60 mm tall, support = filament with − without supports. "
+        "PrusaSlicer: its own default print settings, 60 mm tall, support = the G-code's support features of one "
+        "slice with supports. "
         + (f"Skipped (missing): {', '.join(skipped)}." if skipped else ""),
         "Command: `python benchmarks/paper_table.py " + " ".join(argv if argv is not None else sys.argv[1:]) + "`",
         "",

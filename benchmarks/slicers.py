@@ -5,8 +5,9 @@ shared glTF characters): the default search (``supportless.optimize``, as the
 zoo runs it), then the rest pose and the found pose as printed, both 60 mm
 tall, sliced by PrusaSlicer (its default profile, grid supports), by Cura
 (CuraEngine with ``fdmprinter``'s defaults, normal supports) and by Cura with
-tree supports. Support = filament with supports minus without, mm of 1.75 mm
-filament. A model or slicer that fails is a cell with its one-line reason.
+tree supports. Support = the support extrusions of one slice with supports (the
+G-code's support features; Cura's leave out the brim the supports add), mm of
+1.75 mm filament. A model or slicer that fails is a cell with its one-line reason.
 Prints Markdown; ``--out`` writes it as the "## Three kinds of support"
 section.
 
@@ -73,8 +74,8 @@ def run(name: str, cache: str, settings=None) -> dict:
                             height_mm=REFERENCE_HEIGHT_MM, choice=choice).to_dict()
             row[choice.label] = {"before": s["before"]["support_mm"], "after": s["after"]["support_mm"],
                                  "reduction": s["reduction_percent"], "seconds": time.perf_counter() - t0,
-                                 "before_time_s": s["before"]["support_time_s"],
-                                 "after_time_s": s["after"]["support_time_s"]}
+                                 "before_print_s": s["before"]["total_time_s"],
+                                 "after_print_s": s["after"]["total_time_s"]}
         except SupportlessError as exc:
             row[choice.label] = {"error": str(exc).splitlines()[0]}
     return row
@@ -147,8 +148,8 @@ def main(argv=None):
         + (" with Cura's overhang threshold (40° from the plate, as `--slicer cura` searches)" if settings else "")
         + "; the rest pose and the found pose as printed, 60 mm "
         "tall. PrusaSlicer 2.5: its default profile, grid supports. Cura: CuraEngine 4.13 with fdmprinter's "
-        "defaults (0.1 mm layers, supports from 50° off the vertical), normal or tree supports. Support = filament "
-        "with supports minus without, mm of 1.75 mm filament.", "",
+        "defaults (0.1 mm layers, supports from 50° off the vertical), normal or tree supports. Support = the support "
+        "extrusions of one slice with supports (the G-code's support features), mm of 1.75 mm filament.", "",
         table(rows), "", summary(rows), ""])
     print(text)
     if args.out:

@@ -4,8 +4,10 @@ CuraEngine slices from the command line given Cura's printer definitions
 (``fdmprinter.def.json`` and ``fdmextruder.def.json``, which ship with Cura,
 not with the engine). With ``-v`` it writes ``Filament (mm^3): N`` and
 ``Print time (s): N`` on stderr (the G-code header's own figures are
-placeholders); the support is the difference between a slice with supports
-and one without, as for PrusaSlicer. Every setting is Cura's own default
+placeholders): the whole print. The support is the G-code's ``;TYPE:SUPPORT``
+extrusions of a slice with supports (what ``slice_check`` reports, as for
+PrusaSlicer), or the difference between a slice with supports and one without,
+which also counts the brim the supports add. Every setting is Cura's own default
 (``fdmprinter``: 0.1 mm layers, 20 % infill, a brim, supports from
 :data:`~supportless.files.printer.CURA_SUPPORT_ANGLE` degrees off the vertical) except the filament
 diameter, 1.75 mm, and a build volume made to fit the model.
@@ -222,16 +224,16 @@ def slice_with_cura(placed: Sequence[tuple[np.ndarray, np.ndarray]], names: Sequ
         Cura settings over the defaults (a profile's overrides).
     by_feature : bool
         Slice each mesh once, with supports, and read the support from the G-code's ``;TYPE:SUPPORT*``
-        extrusions (:func:`~supportless.slicing.gcode.feature_filament`): half the runs, for comparing
-        answers (it leaves out what the supports add to the brim: the 60 mm bunny's normal supports 1942
-        against 2162 mm).
+        extrusions (:func:`~supportless.slicing.gcode.feature_filament`): half the runs, as the slice check
+        and the choice among answers measure (it leaves out what the supports add to the brim: the 60 mm
+        bunny's normal supports 1942 against 2162 mm).
 
     Returns
     -------
     meshes : list of dict
         Per mesh, as :class:`~supportless.slicing.prusaslicer.SupportSlices` has them: ``support`` and
-        ``nosupport`` runs (``filament_mm``, ``filament_cm3``, ``print_seconds``, ``seconds``),
-        ``support_mm``, ``size_mm``.
+        ``nosupport`` runs (``filament_mm``, ``filament_cm3``, ``print_seconds``, ``seconds``; only
+        ``support`` by feature, with its ``support_features_mm``), ``support_mm``, ``size_mm``.
     engine : str
     settings : dict of str to str
         The settings given on the command line.

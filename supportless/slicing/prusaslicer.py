@@ -1,14 +1,20 @@
 """Measure support material the way a slicer does, with PrusaSlicer's command line.
 
-:func:`slice_check` slices an original and a posed mesh, each with automatic
-supports and without, and reads ``; filament used [mm]`` from the G-code: the
-support filament is the difference. Both meshes are turned so ``up`` is +Z,
-scaled by one factor that makes the original ``height_mm`` tall, and centred
-on the bed; the print options are given explicitly (:data:`PRESETS`) with an
-empty ``--datadir``, so user presets never matter. The default preset is
-PrusaSlicer 2.5's own defaults, which give the reference figure (Stanford
-bunny, up +Y, 60 mm tall: 3360 mm of support). PrusaSlicer is multi-threaded;
-repeated slices of one mesh can differ by about 0.01 %.
+:func:`slice_check` slices an original and a posed mesh once each, with
+automatic supports, and reads the support filament from the G-code's support
+features (``;TYPE:Support material`` and its interface,
+:func:`~supportless.slicing.gcode.feature_filament`); the whole print's
+filament is ``; filament used [mm]``. No slice without supports is needed, so
+a print that touches the plate only at a tip, which PrusaSlicer refuses to
+slice without supports ("no extrusions in the first layer"), is measured too.
+Both meshes are turned so ``up`` is +Z, scaled by one factor that makes the
+original ``height_mm`` tall, and centred on the bed; the print options are
+given explicitly (:data:`PRESETS`) with an empty ``--datadir``, so user
+presets never matter. The default preset is PrusaSlicer 2.5's own defaults,
+which give the reference figure (Stanford bunny, up +Y, 60 mm tall: 3345 mm of
+support features; filament with supports minus without, the skirt around the
+supports included, is 3360 mm). PrusaSlicer is multi-threaded; repeated slices
+of one mesh can differ by about 0.01 %.
 
 The executable is ``$SUPPORTLESS_PRUSA_SLICER`` if set, else ``prusa-slicer``
 on ``PATH``; slicing needs no display (for a build that wants one, point the
@@ -235,15 +241,19 @@ def _config_args(config: Mapping[str, str]) -> list[str]:
 # --------------------------------------------------------------------------- #
 @dataclass
 class SliceReport:
-    """Support filament before (original) and after (posed), measured by PrusaSlicer.
+    """Support filament before (original) and after (posed), measured by PrusaSlicer or Cura.
 
     Lengths are mm of filament, volumes cm3, masses g (the volume times the
     profile's filament density, PLA's 1.24 g/cm3 when it gives none), times
-    seconds of PrusaSlicer's estimate; ``total`` is the slice with supports,
-    ``model`` the slice without, support their difference (for the time: the
-    printing time the supports add). Sizes
-    are the ``[x, y, z]`` extents in mm on the bed; ``slices`` has the
-    filament and seconds of each of the four runs.
+    seconds of the slicer's estimate. Each mesh is sliced once, with supports:
+    ``support`` is its G-code's support extrusions, ``total`` the whole print
+    (``total_time_s`` its printing time), ``model`` the total minus the
+    support (the skirt or brim included). ``support_time_s`` is None: neither
+    slicer gives the time of one feature, and the printing time the supports
+    add would need a second slice without them, which a print standing on a
+    tip cannot have. Sizes are the ``[x, y, z]`` extents in mm on the bed;
+    ``slices`` has the filament and seconds of each run
+    (``original-support``, ``posed-support``).
     """
 
     support_mm_before: float
@@ -261,6 +271,8 @@ class SliceReport:
     support_g_after: float | None = None
     support_time_s_before: float | None = None
     support_time_s_after: float | None = None
+    total_time_s_before: float | None = None
+    total_time_s_after: float | None = None
     filament_density: float = 1.24
     profile: str = ""
     up: list[float] = field(default_factory=lambda: [0.0, 1.0, 0.0])
@@ -285,7 +297,7 @@ class SliceReport:
         -------
         report : dict
             ``{"before": {"support_mm", "support_cm3", "support_g",
-            "support_time_s", "total_mm", "total_cm3", "model_mm", "size_mm"},
+            "support_time_s", "total_mm", "total_cm3", "total_time_s", "model_mm", "size_mm"},
             "after": {...}, "reduction_percent", "up",
             "height_mm", "scale", "filament_diameter_mm", "slicer",
             "slicer_version", "engine" (``prusa`` or ``cura``), "support" (``grid`` or ``tree``), "config", "support_options", "slices",
@@ -294,7 +306,7 @@ class SliceReport:
         flat = asdict(self)
         d = {side: {key: flat.pop(f"{key}_{side}") for key in
                     ("support_mm", "support_cm3", "support_g", "support_time_s", "total_mm", "total_cm3",
-                     "model_mm", "size_mm")}
+                     "total_time_s", "model_mm", "size_mm")}
              for side in ("before", "after")}
         d.update(flat)
 
@@ -315,9 +327,10 @@ class SupportSlices:
     """PrusaSlicer's support for several meshes placed alike (:func:`slice_support`).
 
     ``meshes[i]`` holds mesh ``i``'s runs ``{"support": {...}, "nosupport": {...}}``
-    (each ``filament_mm``, ``filament_cm3``, ``print_seconds``, ``seconds``),
-    ``support_mm`` (with minus without), ``size_mm`` (its ``[x, y, z]`` extent
-    on the bed); ``slicer`` is the executable and ``config`` the options given
+    (each ``filament_mm``, ``filament_cm3``, ``print_seconds``, ``seconds``; read
+    by feature, only ``support``, with its ``support_features_mm``),
+    ``support_mm`` (with minus without, or the support features), ``size_mm``
+    (its ``[x, y, z]`` extent on the bed); ``slicer`` is the executable and ``config`` the options given
     on its command line.
     """
 
@@ -452,7 +465,12 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
                 workers: int | None = None, slicer: str | None = None,
                 keep_dir: str | os.PathLike | None = None, profile: PrinterProfile | None = None,
                 choice=None) -> SliceReport:
-    """Slice the original and the posed mesh with and without supports and compare.
+    """Slice the original and the posed mesh with supports and compare their support extrusions.
+
+    Each mesh is sliced once, with supports, and its support read from the
+    G-code's support features (:func:`slice_support` with ``by_feature``), so a
+    print standing on a tip, which PrusaSlicer will not slice without
+    supports, has a figure too.
 
     Parameters
     ----------
@@ -466,7 +484,7 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         the same factor. None slices both as they are, in millimetres (print
         files, see :mod:`supportless.files.printframe`).
     timeout : float
-        Seconds allowed for each of the four PrusaSlicer runs.
+        Seconds allowed for each of the two slicer runs (one per mesh).
     config : dict or str, optional
         PrusaSlicer options (name -> value) or a name from :data:`PRESETS`
         (default :data:`DEFAULT_PRESET`, PrusaSlicer's own defaults).
@@ -492,7 +510,8 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     SlicerNotFound
         No PrusaSlicer.
     SlicerError
-        PrusaSlicer failed or timed out (one-line message).
+        The slicer failed or timed out (one-line message), e.g. PrusaSlicer
+        refusing a mesh even with supports.
     InputError
         A mesh that cannot be read or is not a valid triangle mesh.
     """
@@ -509,21 +528,12 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     if height_mm is None:
         height_mm = float(np.ptp(Vo @ rotation_to_z(up)[2]))
     sliced = slice_support([(Vo, Fo), (Vp, Fp)], up, s, timeout, config=config, workers=workers, slicer=exe,
-                           keep_dir=keep_dir, profile=profile, names=("original", "posed"), choice=choice)
+                           keep_dir=keep_dir, profile=profile, names=("original", "posed"), choice=choice,
+                           by_feature=True)
     cfg, exe = sliced.config, sliced.slicer
     from_file = profile is not None and profile.path is not None
-    results = {f"{name}-{kind}": run[kind] for name, run in zip(("original", "posed"), sliced.meshes)
-               for kind in ("support", "nosupport")}
-    meshes = {"original": sliced.meshes[0], "posed": sliced.meshes[1]}
-
-    def filament(name):
-        return results[name]["filament_mm"]
-
-    def added_time(name):
-        t1, t0 = results[f"{name}-support"]["print_seconds"], results[f"{name}-nosupport"]["print_seconds"]
-        return None if t1 is None or t0 is None else t1 - t0
-
-    before, after = meshes["original"]["support_mm"], meshes["posed"]["support_mm"]  # with minus without
+    o, p = sliced.meshes  # the original's and the posed mesh's slice with supports
+    before, after = o["support_mm"], p["support_mm"]  # the G-code's support extrusions
     diameter = profile.filament_diameter if profile is not None else FILAMENT_DIAMETER_MM
     density = profile.filament_density if profile is not None else DEFAULT_DENSITY
     return SliceReport(
@@ -533,23 +543,23 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         support_cm3_after=mm_to_cm3(after, diameter),
         support_g_before=mm_to_cm3(before, diameter) * density,
         support_g_after=mm_to_cm3(after, diameter) * density,
-        support_time_s_before=added_time("original"),
-        support_time_s_after=added_time("posed"),
+        total_time_s_before=o["support"]["print_seconds"],
+        total_time_s_after=p["support"]["print_seconds"],
         filament_density=density,
         filament_diameter_mm=diameter,
         profile=profile.path if from_file else "",
         reduction_percent=reduction(before, after),
-        total_mm_before=filament("original-support"),
-        total_mm_after=filament("posed-support"),
-        model_mm_before=filament("original-nosupport"),
-        model_mm_after=filament("posed-nosupport"),
-        total_cm3_before=results["original-support"]["filament_cm3"],
-        total_cm3_after=results["posed-support"]["filament_cm3"],
+        total_mm_before=o["support"]["filament_mm"],
+        total_mm_after=p["support"]["filament_mm"],
+        model_mm_before=o["support"]["filament_mm"] - before,
+        model_mm_after=p["support"]["filament_mm"] - after,
+        total_cm3_before=o["support"]["filament_cm3"],
+        total_cm3_after=p["support"]["filament_cm3"],
         up=[float(x) for x in np.asarray(up, dtype=float).reshape(3)],
         height_mm=float(height_mm),
         scale=s,
-        size_mm_before=meshes["original"]["size_mm"],
-        size_mm_after=meshes["posed"]["size_mm"],
+        size_mm_before=o["size_mm"],
+        size_mm_after=p["size_mm"],
         slicer=exe,
         slicer_version=_slicer_version(exe) if engine == "prusa" else cura_version(exe),
         engine=engine,
@@ -557,6 +567,6 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         config=dict(profile.raw) if from_file else dict(cfg),
         support_options=list(SUPPORT_OPTIONS) if engine == "prusa" else
         ["support_enable=true", f"support_structure={cfg['support_structure']}"],
-        slices=results,
+        slices={"original-support": o["support"], "posed-support": p["support"]},
         elapsed_s=time.monotonic() - t0,
     )

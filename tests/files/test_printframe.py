@@ -240,7 +240,7 @@ def test_slice_check_measures_the_written_file_itself(prusa_slicer, tiny_files, 
               "--seed", 2, "-q", "-o", out, "--report", tmp_path / "r.json", "--slice-check")
     assert res.exit_code == 0, (res.output, res.exception)
     report = json.loads((tmp_path / "r.json").read_text())
-    by_hand = slice_support([out], up=(0, 0, 1), scale=1.0).support_mm[0]
+    by_hand = slice_support([out], up=(0, 0, 1), scale=1.0, by_feature=True).support_mm[0]
     assert report["slice_check"]["after"]["support_mm"] == pytest.approx(by_hand, rel=2e-3, abs=1.0)
     assert report["slice_check"]["sliced_file"] == str(out)
     assert report["support"]["source"] == "PrusaSlicer"

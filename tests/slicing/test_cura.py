@@ -58,7 +58,9 @@ def test_a_cura_slice_check_reports_the_same_fields_as_prusaslicers(cura_engine)
     b, a = report["before"], report["after"]
     assert b["support_mm"] > 50 and a["support_mm"] == 0 and report["reduction_percent"] == pytest.approx(100)
     assert b["support_cm3"] == pytest.approx(b["support_mm"] * np.pi * 0.875 ** 2 / 1000)
-    assert b["support_g"] == pytest.approx(b["support_cm3"] * 1.24) and b["support_time_s"] > 0
+    assert b["support_g"] == pytest.approx(b["support_cm3"] * 1.24) and b["support_time_s"] is None
+    assert b["total_time_s"] > 0 and b["model_mm"] == pytest.approx(b["total_mm"] - b["support_mm"])
+    assert sorted(report["slices"]) == ["original-support", "posed-support"]  # one slice per mesh
 
 
 def test_cura_is_used_for_tree_supports_and_prusaslicer_refuses_them():

@@ -255,13 +255,14 @@ def test_slice_check_pipeline_with_a_stand_in_slicer(tmp_path):
     assert r.support_mm_before == pytest.approx(300.0, abs=1e-4)
     assert r.support_mm_after == pytest.approx(150.0, abs=1e-4)
     assert r.reduction_percent == pytest.approx(50.0, abs=1e-4)
-    assert r.model_mm_before == 1000.0 and r.total_cm3_before == 2.5
+    assert r.model_mm_before == pytest.approx(1000.0) and r.total_cm3_before == 2.5  # total minus support
     assert r.support_cm3_before == mm_to_cm3(r.support_mm_before)
     assert r.scale == 3.0
     np.testing.assert_allclose(r.size_mm_before, [30.0, 30.0, 30.0], rtol=0, atol=1e-9)
     np.testing.assert_allclose(r.size_mm_after, [30.0, 30.0, 15.0], rtol=0, atol=1e-9)
     assert r.slicer == exe and r.slicer_version == "PrusaSlicer-0.0 stand-in"
-    assert sorted(r.slices) == ["original-nosupport", "original-support", "posed-nosupport", "posed-support"]
+    assert sorted(r.slices) == ["original-support", "posed-support"]  # one slice per mesh, with supports
+    assert r.support_time_s_before is None and not list(keep.glob("*nosupport*"))
     assert r.config["bed-shape"] == "0x0,250x0,250x210,0x210"
     assert r.config["support-material-threshold"] == sl.PRUSA_DEFAULTS_CONFIG["support-material-threshold"]
     # the meshes went to PrusaSlicer on the bed: lowest point at z = 0, centred on the 250 x 210 bed
@@ -385,10 +386,10 @@ def test_cli_slice_check_on_the_demo_figure(prusa_slicer, tmp_path):
     assert data["after"]["support_mm"] < data["before"]["support_mm"]
     assert data["reduction_percent"] > 0
     assert data["before"]["support_g"] == pytest.approx(data["before"]["support_cm3"] * 1.24)
-    assert data["before"]["support_time_s"] > data["after"]["support_time_s"] >= 0
+    assert data["before"]["support_time_s"] is None and data["after"]["total_time_s"] > 0  # one slice per mesh
     text = CliRunner().invoke(main, ["slice-check", str(rest), str(posed), "--posed-as", "original"])
     assert text.exit_code == 0 and "reduction" in text.output
-    assert " g, " in text.output and "printing time of the supports:" in text.output and "less" in text.output
+    assert " g)" in text.output and "printing time of the supports" not in text.output
 
 
 def test_cli_slice_check_without_prusaslicer_says_how_to_install(tmp_path, monkeypatch):
@@ -438,14 +439,15 @@ def test_slice_check_with_a_profile_loads_it_and_reports_grams_and_time(tmp_path
     args = (keep / "original-support.gcode.args").read_text().splitlines()
     assert args[args.index("--load") + 1] == str(profile.path)
     assert "--support-material-threshold=0" not in args  # the built-in preset is not passed over the file
-    assert "--no-support-material" in (keep / "original-nosupport.gcode.args").read_text().splitlines()
     assert r.support_mm_before == pytest.approx(30.0, abs=1e-4)
     assert r.support_cm3_before == pytest.approx(mm_to_cm3(30.0, 2.85))
     assert r.support_g_before == pytest.approx(mm_to_cm3(30.0, 2.85) * 1.27)
-    assert r.support_time_s_before == 3000.0 and r.support_time_s_after == 1500.0
+    # the whole print's time with supports; the supports' own time is not measured
+    assert r.total_time_s_before == 3600.0 and r.total_time_s_after == 2100.0 and r.support_time_s_after is None
     assert r.config == profile.raw and r.profile == profile.path
     d = r.to_dict()
-    assert d["before"]["support_g"] == r.support_g_before and d["after"]["support_time_s"] == 1500.0
+    assert d["before"]["support_g"] == r.support_g_before and d["after"]["total_time_s"] == 2100.0
+    assert d["after"]["support_time_s"] is None
 
 
 def test_feature_filament_counts_extrusion_per_feature_absolute_and_relative():
@@ -464,16 +466,35 @@ def test_feature_filament_counts_extrusion_per_feature_absolute_and_relative():
     assert feature_filament("; no moves\n") == {}
 
 
-def test_support_by_feature_agrees_with_the_difference_of_two_slices(prusa_slicer):
-    """PrusaSlicer: one slice read by feature gives the support of with-minus-without to the skirt's few mm."""
-    from supportless.slicing.prusaslicer import scale_for_height, slice_support
+def test_slice_check_agrees_with_the_difference_of_two_slices(prusa_slicer):
+    """The support features of one slice against with-minus-without supports: apart by the skirt's few mm."""
+    from supportless.slicing.prusaslicer import slice_support
 
     V, F = _gamma_mesh()  # the arm out: it needs support
-    up = (0.0, 1.0, 0.0)
-    scale = scale_for_height(V, up, 30.0)
-    two = slice_support([(V, F)], up, scale, config="fast")
-    one = slice_support([(V, F)], up, scale, config="fast", by_feature=True)
-    assert "nosupport" not in one.meshes[0] and two.support_mm[0] > 50.0
-    assert one.support_mm[0] == pytest.approx(two.support_mm[0], rel=0.03, abs=5.0)
-    # the features sum to the file's own total
-    assert one.meshes[0]["support"]["filament_mm"] == pytest.approx(two.meshes[0]["support"]["filament_mm"], rel=1e-9)
+    r = slice_check((V, F), (V, F), up=(0, 1, 0), height_mm=30.0, timeout=120)  # the default preset: a skirt
+    (two,) = slice_support([(V, F)], (0, 1, 0), r.scale, timeout=120).meshes  # the old way
+    assert two["support_mm"] > 50.0
+    assert r.support_mm_before == pytest.approx(two["support_mm"], rel=0.03, abs=5.0)  # 537 against 542 mm
+    assert r.model_mm_before == pytest.approx(two["nosupport"]["filament_mm"], rel=0.01)
+    assert r.total_mm_before == pytest.approx(two["support"]["filament_mm"], rel=1e-3)
+    assert r.total_time_s_before == pytest.approx(two["support"]["print_seconds"], rel=0.01)
+
+
+def _octahedron_on_its_apex():
+    """A regular octahedron, 20 units tall along +Z: it touches the plate at one point."""
+    import trimesh
+
+    V = 10.0 * np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    return V, np.asarray(trimesh.convex.convex_hull(V).faces, np.int64)
+
+
+def test_a_print_on_a_tip_gets_a_figure(prusa_slicer):
+    """PrusaSlicer refuses a print touching the plate at a tip without supports; with them, its support is measured."""
+    from supportless.slicing.prusaslicer import slice_support
+
+    tip = _octahedron_on_its_apex()
+    with pytest.raises(SlicerError, match="no extrusions in the first layer"):  # the old way: no figure
+        slice_support([tip], (0, 0, 1), 1.0, config="fast", timeout=120)
+    r = slice_check(tip, _box_vf(), up=(0, 0, 1), height_mm=20.0, config="fast", timeout=120)
+    assert r.support_mm_before > 100.0 and r.support_mm_after == 0.0 and r.reduction_percent == 100.0
+    assert 0.0 < r.model_mm_before < r.total_mm_before and r.total_time_s_before > 0
