@@ -7,6 +7,8 @@ features (``;TYPE:Support material`` and its interface,
 filament is ``; filament used [mm]``. No slice without supports is needed, so
 a print that touches the plate only at a tip, which PrusaSlicer refuses to
 slice without supports ("no extrusions in the first layer"), is measured too.
+With CuraEngine (which slices any print) the support stays the filament with
+supports minus without: the brim Cura lays round its supports is support too.
 Both meshes are turned so ``up`` is +Z, scaled by one factor that makes the
 original ``height_mm`` tall, and centred on the bed; the print options are
 given explicitly (:data:`PRESETS`) with an empty ``--datadir``, so user
@@ -470,7 +472,8 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
     Each mesh is sliced once, with supports, and its support read from the
     G-code's support features (:func:`slice_support` with ``by_feature``), so a
     print standing on a tip, which PrusaSlicer will not slice without
-    supports, has a figure too.
+    supports, has a figure too. With CuraEngine, with supports minus without
+    (its brim round the supports counted).
 
     Parameters
     ----------
@@ -529,11 +532,13 @@ def slice_check(original: MeshLike, posed: MeshLike, up: Sequence[float] = (0, 1
         height_mm = float(np.ptp(Vo @ rotation_to_z(up)[2]))
     sliced = slice_support([(Vo, Fo), (Vp, Fp)], up, s, timeout, config=config, workers=workers, slicer=exe,
                            keep_dir=keep_dir, profile=profile, names=("original", "posed"), choice=choice,
-                           by_feature=True)
+                           # PrusaSlicer refuses a print on a tip without supports: its support features; Cura
+                           # slices anything, and the brim it lays round supports is theirs: with minus without
+                           by_feature=engine == "prusa")
     cfg, exe = sliced.config, sliced.slicer
     from_file = profile is not None and profile.path is not None
     o, p = sliced.meshes  # the original's and the posed mesh's slice with supports
-    before, after = o["support_mm"], p["support_mm"]  # the G-code's support extrusions
+    before, after = o["support_mm"], p["support_mm"]
     diameter = profile.filament_diameter if profile is not None else FILAMENT_DIAMETER_MM
     density = profile.filament_density if profile is not None else DEFAULT_DENSITY
     return SliceReport(
