@@ -41,6 +41,8 @@ printer profile.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from .surface import prepare
@@ -66,14 +68,33 @@ COEFFICIENTS = (1.1617, 0.0596, 1.9044)
 _CHUNK_ELEMENTS = 1 << 20
 
 
+#: Surfaces up to this many faces keep their edges (:func:`_edge_faces`) for the next call on them.
+_KEPT_EDGES_FACES = 200_000
+
+
 def _edge_faces(faces):
     """The two faces on each edge of a closed surface.
 
     ``faces`` (f, 3) int. Returns ``edges`` (e, 2) int64 vertex pairs and
     ``left``, ``right`` (e,) int64 the faces on either side (edges met more
-    or fewer than twice, as on a surface that is not closed, are left out).
+    or fewer than twice, as on a surface that is not closed, are left out);
+    read-only, kept for the last few surfaces (a pose edited in the browser
+    app is measured on the same triangles again and again).
     """
-    F = np.asarray(faces, np.int64)
+    F = np.ascontiguousarray(faces, np.int64)
+    if len(F) > _KEPT_EDGES_FACES:
+        return _edges_of(F)
+    return _kept_edges(F.tobytes(), len(F))
+
+
+@lru_cache(maxsize=4)
+def _kept_edges(raw: bytes, count: int):
+    """:func:`_edges_of` the ``count`` faces whose int64 bytes are ``raw``, kept for the next call."""
+    return _edges_of(np.frombuffer(raw, np.int64).reshape(count, 3))
+
+
+def _edges_of(F):
+    """:func:`_edge_faces` of (f, 3) int64 faces, computed."""
     E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
     owner = np.tile(np.arange(len(F)), 3)
     order = np.lexsort((E[:, 1], E[:, 0]))
@@ -83,7 +104,10 @@ def _edge_faces(faces):
     before = np.r_[False, same[:-1]]
     after = np.r_[same[1:], False]
     pair = np.nonzero(same & ~before & ~after)[0]
-    return E[pair], owner[pair], owner[pair + 1]
+    out = E[pair], owner[pair], owner[pair + 1]
+    for x in out:
+        x.flags.writeable = False
+    return out
 
 
 def support_features(vertices, faces, up, overhang_angle, scale=1.0, delta=DELTA, interface_mm=INTERFACE_MM):

@@ -3,7 +3,9 @@
 :func:`pose_measures` measures one pose (the command line's report and the
 browser app's panel both use it); :func:`build_report` puts the rest pose and
 a search's pose side by side as the JSON report of ``optimize``;
-:func:`write_pictures` draws them.
+:func:`write_pictures` draws them. :func:`predicted_filament_mm` (with
+:func:`filament_grams`) is the support filament estimate the summary and the
+browser app's panel both lead with.
 """
 
 from __future__ import annotations
@@ -29,8 +31,9 @@ from ..search.naturalness import naturalness
 from ..search.orientation import print_direction, rotation_axis_angle
 from .render import plot_convergence, render_before_after
 
-__all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "pose_measures", "predicted_slicer", "reduction",
-           "slicer_label", "support_headline", "write_pictures"]
+__all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "filament_grams", "pose_measures",
+           "predicted_filament_mm", "predicted_slicer", "reduction", "slicer_label", "support_headline",
+           "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -133,18 +136,49 @@ def predicted_slicer(rig, result, height_mm: float = REFERENCE_HEIGHT_MM) -> dic
         filament, mm of 1.75 mm filament) and ``reduction`` (a fraction,
         rest -> found; None when the rest pose needs none); None for planar rigs.
     """
+    angle = float(result.settings.overhang_angle)
+    rest = place_on_plate(rig.vertices, np.asarray(rig.up, np.float64))
+    predicted = predicted_filament_mm(rig, np.stack([rest, result.print_vertices]), angle, height_mm)
+    if predicted is None:
+        return None
+    before, after = predicted
+    return {"height_mm": float(height_mm), "threshold_deg": angle, "before_mm": float(before),
+            "after_mm": float(after), "reduction": None if before <= 0 else float(1.0 - after / before)}
+
+
+def predicted_filament_mm(rig, print_vertices: np.ndarray, overhang_angle: float,
+                          height_mm: float = REFERENCE_HEIGHT_MM) -> np.ndarray | float | None:
+    """PrusaSlicer's support filament of poses as printed, as the slicer model predicts it, at a printed height.
+
+    The one estimate the summary (:func:`predicted_slicer`) and the browser app's panel lead with.
+
+    Parameters
+    ----------
+    rig : Rig
+    print_vertices : (P, n, 3) or (n, 3) float64
+        Posed surfaces of ``rig`` in the print frame, on the plate, model units.
+    overhang_angle : float
+        The printer's threshold, degrees.
+    height_mm : float
+        The rest pose is printed this tall; the poses at the same scale.
+
+    Returns
+    -------
+    filament_mm : (P,) float64 or float or None
+        mm of 1.75 mm filament; None for a planar rig or one with no height.
+    """
     if rig.dim != 3:
         return None
     up = np.asarray(rig.up, np.float64)
     extent = float(np.ptp(rig.vertices @ up))
     if not extent > 0:
         return None
-    scale = float(height_mm) / extent
-    angle = float(result.settings.overhang_angle)
-    before, after = predicted_support_mm(np.stack([place_on_plate(rig.vertices, up), result.print_vertices]),
-                                         rig.faces, up, angle, scale)
-    return {"height_mm": float(height_mm), "threshold_deg": angle, "before_mm": float(before),
-            "after_mm": float(after), "reduction": None if before <= 0 else float(1.0 - after / before)}
+    return predicted_support_mm(print_vertices, rig.faces, up, float(overhang_angle), float(height_mm) / extent)
+
+
+def filament_grams(mm: float) -> float:
+    """Grams of ``mm`` of 1.75 mm filament at the default density: the grams beside a predicted length."""
+    return float(mm_to_cm3(mm, FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY)
 
 
 def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
@@ -292,7 +326,7 @@ def standing_answer(result) -> dict | None:
     pick, chosen = choice.candidates[i], choice.candidates[choice.chosen]
     sliced = pick.sliced_mm is not None and chosen.sliced_mm is not None
     mm = [c.sliced_mm if sliced else c.predicted_mm for c in (pick, chosen)]
-    grams = [mm_to_cm3(v, FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY for v in mm]
+    grams = [filament_grams(v) for v in mm]
     return {"standing_mm": float(mm[0]), "standing_g": float(grams[0]), "answer_mm": float(mm[1]),
             "answer_g": float(grams[1]), "answer_turned_deg": float(rotation_axis_angle(result.rotation)[1]),
             "is_answer": i == choice.chosen, "source": "sliced" if sliced else "predicted", "index": int(i)}
@@ -352,7 +386,7 @@ def support_headline(report: dict) -> dict | None:
                "after_mm": a["support_mm"], "before_g": b.get("support_g"), "after_g": a.get("support_g"),
                "before_time_s": b.get("support_time_s"), "after_time_s": a.get("support_time_s")}
     elif predicted:
-        grams = [mm_to_cm3(predicted[k], FILAMENT_DIAMETER_MM) * DEFAULT_DENSITY for k in ("before_mm", "after_mm")]
+        grams = [filament_grams(predicted[k]) for k in ("before_mm", "after_mm")]
         out = {"source": "predicted", "height_mm": predicted["height_mm"], "before_mm": predicted["before_mm"],
                "after_mm": predicted["after_mm"], "before_g": grams[0], "after_g": grams[1],
                "before_time_s": None, "after_time_s": None}

@@ -340,6 +340,38 @@ def test_panel_shows_the_objective_its_search_minimises(app, rig):
     assert app.wait_idle()
 
 
+def test_the_panel_leads_with_the_estimate_then_the_slicers_figure(app, rig, tmp_path, monkeypatch):
+    """The support filament leads the energies: the command line's estimate; a Slice's figure while its pose shows."""
+    monkeypatch.setenv("SUPPORTLESS_PRUSA_SLICER", fake_exe(tmp_path, "prusa-slicer", stand_in_slicer(
+        "float(len(rec['v'])) / 10 + float(rec['v'][:, :, 2].max())")))
+    app.reset()
+    app.slice_report = None
+    b = rig.bone_count - 1
+    app.state.set_bone_angles(b, [0.0, 0.0, 30.0])
+    assert app.wait_idle()
+    estimate = app.measures["support_lead"]
+    lines = app.panel.measures.content.splitlines()
+    assert estimate["source"] == "estimate" and lines[0].startswith("- Support filament, an estimate: **")
+    assert lines[1].startswith("- Support columns (the preview's, solid, as printed): ")  # the preview's own, after
+    assert app.start_slice(("prusa", "grid"))
+    assert app.slicing.wait(120) and app.slice_report is not None and app.wait_idle()
+    sliced, lead = app.slice_report, app.measures["support_lead"]
+    assert lead["source"] == "PrusaSlicer" and lead["mm"] == pytest.approx(sliced["after"]["support_mm"])
+    assert lead["g"] == pytest.approx(sliced["after"]["support_g"]) and lead["estimate"]["mm"] == estimate["mm"]
+    assert lead["rest_mm"] == pytest.approx(sliced["before"]["support_mm"])
+    lines = app.panel.measures.content.splitlines()
+    figure = f"**{lead['mm']:,.0f} mm ≈ {lead['g']:.1f} g**"
+    assert lines[0].startswith(f"- Support filament, sliced by PrusaSlicer: {figure}")
+    assert lines[1].startswith("- Support columns (the preview's")
+    # another pose: the slice is not of it, the estimate leads again; back to the sliced pose, the slicer's figure
+    app.state.set_bone_angles(b, [0.0, 0.0, 35.0])
+    assert app.wait_idle() and app.measures["support_lead"]["source"] == "estimate"
+    assert "the last Slice was of another pose" in app.panel.measures.content.splitlines()[0]
+    assert app.state.undo() and app.wait_idle()
+    assert app.measures["support_lead"]["source"] == "PrusaSlicer"
+    app.slice_report = None
+
+
 # --------------------------------------------------------------------------- #
 # the page in a real browser
 # --------------------------------------------------------------------------- #
@@ -379,7 +411,8 @@ def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
             energies.wait_for(timeout=60000)
             rest_text = energies.inner_text()
             rest_objective = _number(rest_text, "Objective")
-            rest_column = _number(rest_text, "Support (columns, as printed)")
+            rest_column = _number(rest_text, "Support columns (the preview's, solid, as printed)")
+            rest_filament = rest_text.split("Support filament, an estimate: ")[1].split(" mm")[0]  # bold, as shown
 
             # pick the last bone in the dropdown, then turn it with the Z slider's keyboard arrows
             last = rig.bone_names()[-1]
@@ -420,9 +453,8 @@ def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
 
             # back to rest, then a small search from the panel
             page.get_by_role("button", name="Reset to rest pose").click()
-            page.wait_for_function("c => document.body.innerText.includes('Support (columns, as printed): ' + c)",
-                                   arg=rest_text.split("Support (columns, as printed): ")[1].split(" mm³")[0],
-                                   timeout=30000)
+            page.wait_for_function("c => document.body.innerText.includes('Support filament, an estimate: ' + c)",
+                                   arg=rest_filament, timeout=30000)
             for label, value in (("Particles", "12"), ("Iterations", "6")):
                 box = page.get_by_label(label)
                 box.fill(value)
@@ -436,7 +468,7 @@ def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
             # the panel shows the measures of the pose the search left (rendered by the page, so polled)
             assert _until(lambda: "less than rest" in energies.inner_text())
             done_text = energies.inner_text()
-            assert _number(done_text, "Support (columns, as printed)") < rest_column
+            assert _number(done_text, "Support columns (the preview's, solid, as printed)") < rest_column
             assert "less than rest" in done_text
             # the answer chosen among the search's (turned or as it stands, by PrusaSlicer when found): said as it is
             turned = not np.allclose(app.state.last_result.rotation, np.eye(3))

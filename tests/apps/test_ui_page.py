@@ -158,7 +158,7 @@ def test_a_glb_uploaded_opens_framed_with_its_bones_and_figures(app, page, share
     _wait_text(page, "opened Fox")
     assert app.rig is not None and app.rig.name == "Fox" and app.rig.bone_count == 27
     assert app.wait_idle(60)
-    _wait_text(page, r"Support \(columns, as printed\): [0-9,.]+ mm³ ≈ [0-9.]+ g")
+    _wait_text(page, r"Support filament, an estimate: [0-9,]+ mm ≈ [0-9.]+ g")
     bones = page.get_by_role("combobox").first  # the bone list is the fox's
     assert _until(lambda: bones.input_value() == app.rig.bone_names()[0], 30)
     share, contrast = model_on_screen(page, app, "2-fox-uploaded")
@@ -234,7 +234,8 @@ def test_slice_shows_the_slicers_figures_before_and_after(app, page, tmp_path, m
     assert re.search(r"support filament\s+[0-9,]+ mm\s+[0-9,]+ mm", text), text
     assert re.search(r"support\s+[0-9.]+ g\s+[0-9.]+ g", text), text
     assert app.slice_report["before"]["support_mm"] == pytest.approx(len(app.rig.faces) / 100)
-    page.get_by_text("support filament").scroll_into_view_if_needed()
+    _wait_text(page, r"Support filament, sliced by PrusaSlicer: [0-9,]+ mm ≈ [0-9.]+ g")  # it leads the energies
+    page.get_by_role("cell", name="support filament").scroll_into_view_if_needed()  # the Slice folder's table
     _shot(page, "6-sliced")
     page.get_by_text("Slice", exact=True).click()
 

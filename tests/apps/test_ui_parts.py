@@ -1,5 +1,6 @@
 """The browser app's parts that need no browser: uploads checked as the CLI checks files, the support preview's
-boxes, the figures in human units, the rule a pose breaks in words, and the Slice button's background run."""
+boxes, the figures in human units, the support filament the panel leads with, the rule a pose breaks in words, and
+the Slice button's background run."""
 
 from __future__ import annotations
 
@@ -10,9 +11,12 @@ import pytest
 from slicers import fake_exe, stand_in_slicer
 
 from supportless.apps.ui import opener
-from supportless.apps.ui.readout import broken_rules, grams, volume_text
+from supportless.apps.ui.filament import support_lead
+from supportless.apps.ui.panel import lead_markdown
+from supportless.apps.ui.readout import broken_rules, filament_text, grams, volume_text
 from supportless.apps.ui.scene import column_boxes
 from supportless.apps.ui.slicerun import SliceRun, slice_markdown
+from supportless.apps.ui.state import EditorState
 from supportless.base.errors import InputError
 from supportless.energies.support import support_columns, support_volume
 from supportless.slicing.choice import SlicerChoice
@@ -100,6 +104,84 @@ def test_volumes_read_in_printed_millimetres_and_grams():
     assert volume_text(9.48, 10.0) == "9,480 mm³ ≈ 11.8 g"  # 9.48 units³ at 10 mm per unit
     assert volume_text(0.5, 1.0) == "0.5 mm³ ≈ 0.00 g"
     assert volume_text(None, 1.0) == "n/a"
+    assert volume_text(9.48, 10.0, with_grams=False) == "9,480 mm³"
+    assert filament_text(4685.2, 13.97) == "4,685 mm ≈ 14.0 g" and filament_text(4685.2, None) == "4,685 mm"
+
+
+# --------------------------------------------------------------------------- #
+# the support figure the panel leads with
+# --------------------------------------------------------------------------- #
+@pytest.fixture(scope="module")
+def summarised(tmp_path_factory, branch_files):
+    """``supportless optimize`` of the branch figure with no slicer (the slicer model chooses a turned answer): its
+    printed summary, pose file and report."""
+    import json
+
+    from click.testing import CliRunner
+
+    from supportless.apps.cli import main
+
+    out = tmp_path_factory.mktemp("summarised")
+    result = CliRunner().invoke(main, [str(a) for a in (
+        "optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 10, "--iterations",
+        4, "--seed", 2, "-q", "-o", out / "printed.stl", "--pose", out / "pose.json", "--report", out / "report.json")],
+        env={"SUPPORTLESS_PRUSA_SLICER": str(out / "no-such-slicer"), "SUPPORTLESS_CURA_ENGINE": str(out / "none")})
+    assert result.exit_code == 0, result.output
+    return out, result.stdout, json.loads((out / "report.json").read_text())
+
+
+def test_the_lead_is_the_command_lines_predicted_filament(summarised, branch_files):
+    import supportless as sl
+
+    out, stdout, report = summarised
+    summary = report["support"]  # the line the summary prints first
+    printed = " ".join(stdout.split())  # as printed, rich's wrapping undone
+    assert summary["source"] == "predicted" and summary["line"] in printed
+    assert not np.allclose(report["print_rotation"]["matrix"], np.eye(3))  # turned: counted as printed
+    # the same pose of the same model in the app
+    state = EditorState(sl.load_rig(branch_files["mesh"], cache_dir=branch_files["cache"]), workdir=out)
+    state.load_pose(out / "pose.json")
+    np.testing.assert_allclose(state.get_rotation(), report["print_rotation"]["matrix"], atol=1e-12)
+    lead = support_lead(state, *state.get_pose())
+    assert lead["source"] == "estimate" and lead["estimate"] is None and not lead["other_slice"]
+    for key, theirs in (("mm", "after_mm"), ("g", "after_g"), ("rest_mm", "before_mm"), ("rest_g", "before_g"),
+                        ("reduction_percent", "reduction_percent"), ("height_mm", "height_mm")):
+        assert lead[key] == pytest.approx(summary[theirs], rel=1e-9), key
+    # said alike, labelled an estimate in both
+    line, = lead_markdown(lead)
+    assert f"**{summary['after_mm']:,.0f} mm ≈ {summary['after_g']:.1f} g**" in line
+    assert f"{summary['after_g']:.1f} g ({summary['after_mm']:,.0f} mm)" in printed
+    assert "estimate" in line and "predicted for PrusaSlicer, an estimate" in printed
+
+
+def _sliced(angles, R, before_mm, after_mm):
+    return {"before": {"support_mm": before_mm, "support_g": before_mm / 300}, "engine": "cura", "support": "tree",
+            "after": {"support_mm": after_mm, "support_g": after_mm / 300}, "height_mm": 60.0, "pose": (angles, R)}
+
+
+def test_a_slice_of_this_pose_leads_and_the_columns_follow(branch_rig, tmp_path):
+    from supportless.apps.ui.panel import measures_markdown
+
+    state = EditorState(branch_rig, workdir=tmp_path)
+    state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 30.0])
+    angles, R = state.get_pose()
+    estimate = support_lead(state, angles, R)
+    lead = support_lead(state, angles, R, slice_report=_sliced(angles, R, 3000.0, 1200.0))
+    assert lead["source"] == "Cura, tree supports" and lead["mm"] == 1200.0 and lead["g"] == pytest.approx(4.0)
+    assert lead["reduction_percent"] == pytest.approx(60.0) and lead["estimate"]["mm"] == estimate["mm"]
+    text = measures_markdown(state.measure(exact=False), state.settings, {}, 3, state.print_frame.scale, [], lead)
+    first, second = text.splitlines()[:2]
+    assert first.startswith("- Support filament, sliced by Cura, tree supports: **1,200 mm ≈ 4.0 g** (60.0 % less")
+    assert f"the estimate: {filament_text(estimate['mm'], estimate['g'])}" in first
+    # the preview's column volume: its own line after it, no grams beside the slicer's
+    assert second.startswith("- Support columns (the preview's, solid, as printed): ") and " g" not in second
+    # a slice of another pose (or turn) does not lead: the estimate does, and says the slice is not of this pose
+    other = _sliced(angles + 0.1, R, 3000.0, 1200.0)
+    lead = support_lead(state, angles, R, slice_report=other)
+    assert lead["source"] == "estimate" and lead["mm"] == estimate["mm"] and lead["other_slice"]
+    assert "the last Slice was of another pose" in lead_markdown(lead)[0]
+    assert support_lead(state, angles, np.eye(3)[[1, 0, 2]] * [1, 1, -1], slice_report=_sliced(
+        angles, R, 3000.0, 1200.0))["source"] == "estimate"
 
 
 def test_a_pose_past_a_joint_limit_is_named(tpose_rig):

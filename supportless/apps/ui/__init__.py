@@ -6,6 +6,8 @@
   side panel; :mod:`supportless.apps.ui.ports`: which port the server takes;
 * :mod:`supportless.apps.ui.opener`: models sent from the page; :mod:`supportless.apps.ui.slicerun`: the
   Slice button's background run; :mod:`supportless.apps.ui.readout`: figures in words and human units;
+  :mod:`supportless.apps.ui.filament`: the support filament the panel leads with (the summary's estimate, or the
+  slicer's figure after a Slice);
 * :mod:`supportless.apps.ui.app`: :class:`App` wires them, :func:`run_app` serves the page.
 """
 

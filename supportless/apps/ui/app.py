@@ -33,6 +33,7 @@ from ...base.errors import SupportlessError
 from ...energies.support import support_columns
 from ...search.orientation import rotation_axis_angle
 from ...search.settings import SearchSettings, bone_index
+from .filament import slice_meshes, support_lead
 from .front import FrontBrowser
 from .guard import Guard, is_loopback, limit_uploads
 from .opener import MAX_UPLOAD_BYTES, OpenOptions, Uploads, prepare_model
@@ -82,7 +83,7 @@ class App:
     url : str
     port : int
     measures : dict
-        :meth:`EditorState.measure` of the last drawn pose.
+        :meth:`EditorState.measure` of the last drawn pose, and the ``support_lead`` (:func:`.filament.support_lead`).
     shown_vertices : (n, d) float64 or None
         The exactly posed surface last drawn, in the frame of the view
         (standing, or as printed: ``print_pose(rig.pose(angles), R, up)``).
@@ -413,10 +414,7 @@ class App:
         if missing:
             self._error(f"cannot slice: {missing}")
             return False
-        frame, state = self.state.print_frame, self.state
-        rest = (frame.place(self.rig.vertices), self.rig.faces)
-        posed = (frame.place(state.printed_on_plate()), self.rig.faces)
-        if not self.slicing.start(rest, posed, choice):
+        if not self.slicing.start(choice=choice, **slice_meshes(self.state)):
             self._set_status("a slice is already running")
             return False
         self.panel.show_slicing(True, f"slicing with {choice.label}: the rest pose and this pose, with and without "
@@ -436,6 +434,7 @@ class App:
             self._error(f"slicing failed: {error}")
             return
         self.slice_report = report
+        self._request_render()  # the panel leads with the slicer's figure while the pose is the one sliced
         self.panel.show_slicing(False, slice_markdown(report))
         self._set_status("sliced: the slicer's figures are in the Slice folder")
 
@@ -609,13 +608,14 @@ class App:
         if rig.dim == 3:
             self.scene.draw_support(support_columns(shown, rig.faces, rig.up, settings.overhang_angle,
                                                     PREVIEW_RESOLUTION) if view["show_support"] else None)
+        m["support_lead"] = lead = support_lead(state, angles, R, V, self.slice_report)
         t_done = time.perf_counter()
         self.measures, self.shown_vertices = m, shown
         mesh_ms, full_ms = 1e3 * (t_mesh - t_in), 1e3 * (t_done - t_in)
         self._latencies = (self._latencies + [mesh_ms])[-50:]
         self.latency_ms = {"mesh": mesh_ms, "full": full_ms, "median_mesh": float(np.median(self._latencies))}
         rules = broken_rules(state.objective, angles) if m["terms"]["violation"] > 0 else []
-        text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules)
+        text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules, lead)
         self.panel.show_measures(("**Showing the rest pose (before)**\n\n" if view["before"] else "") + text)
         self.panel.show_bone(selected, fixed, locked)
 

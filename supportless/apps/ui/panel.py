@@ -13,10 +13,11 @@ import numpy as np
 from ...search.objective import INFEASIBLE, OVERHANG_MODELS
 from ...search.settings import ORIENT_MODES, RANGES, SearchSettings
 from .opener import MODEL_SUFFIXES, SKELETON_SUFFIXES
-from .readout import volume_text
+from .readout import filament_text, volume_text
 from .scene import MESH_OPACITY
 
-__all__ = ["NUMBER_SETTINGS", "Panel", "SLICERS", "VIEWS", "drop_zone_html", "measures_markdown", "turn_text"]
+__all__ = ["NUMBER_SETTINGS", "Panel", "SLICERS", "VIEWS", "drop_zone_html", "lead_markdown", "measures_markdown",
+           "turn_text"]
 
 #: The slicers the Slice folder offers: label -> (engine, support), as ``--slicer`` and ``--support``.
 SLICERS = {"PrusaSlicer": ("prusa", "grid"), "Cura": ("cura", "grid"), "Cura, tree supports": ("cura", "tree")}
@@ -65,8 +66,26 @@ def turn_text(m: dict) -> str:
             f"printed upward")
 
 
+def lead_markdown(lead: dict | None) -> list[str]:
+    """The panel's first line: the support filament (:func:`supportless.apps.ui.filament.support_lead`), in words.
+
+    The slicer's figure when a Slice measured this pose (the estimate beside it), else the estimate the command
+    line's summary prints, labelled as one; nothing for a planar rig (None).
+    """
+    if lead is None:
+        return []
+    figure, vs = filament_text(lead["mm"], lead["g"]), _vs_rest(lead["reduction_percent"])
+    estimate = lead.get("estimate")
+    if estimate is not None:
+        return [f"- Support filament, sliced by {lead['source']}: **{figure}** ({vs}) · the estimate: "
+                f"{filament_text(estimate['mm'], estimate['g'])}"]
+    other = "; the last Slice was of another pose" if lead.get("other_slice") else ""
+    return [f"- Support filament, an estimate: **{figure}** ({vs}) · predicted for PrusaSlicer, printed "
+            f"{lead['height_mm']:.4g} mm tall, as the command line's summary says (Slice measures it{other})"]
+
+
 def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int, scale: float = 1.0,
-                      rules: list[str] | None = None) -> str:
+                      rules: list[str] | None = None, lead: dict | None = None) -> str:
     """The energies list of the panel.
 
     Parameters
@@ -83,6 +102,9 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         Millimetres per model unit (the print frame's): support volumes are shown printed, mm³ and grams.
     rules : list of str, optional
         The hard rules the pose breaks (:func:`supportless.apps.ui.readout.broken_rules`), said under the objective.
+    lead : dict, optional
+        The support filament the list leads with (:func:`supportless.apps.ui.filament.support_lead`); the
+        preview's column volume follows it as its own line, its grams left out (a slicer lays down less).
     """
     t = m["terms"]
     inter = m.get("intersecting_faces")
@@ -91,12 +113,14 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
     red = m.get("reduction", {})
     turned = abs(m["turn_deg"]) >= 0.05
     up = m["upright"]
-    vol = (lambda v: volume_text(v, scale)) if dim == 3 else _fmt
+    vol = (lambda v: volume_text(v, scale, with_grams=lead is None)) if dim == 3 else _fmt
+    column = vol(m["support_column"]) if lead is not None else f"**{vol(m['support_column'])}**"
     standing = ([f"- Standing (not turned): support (columns) {vol(up['support_column'])} · "
                  f"{int(np.sum(m['risky_standing']))} risky faces"] if turned else [])
     broken = [f"- ⚠ Breaks a rule (the objective adds {INFEASIBLE:g} while it does): {rule}" for rule in rules or ()]
     return "\n".join([
-        f"- Support (columns, as printed): **{vol(m['support_column'])}** ({_vs_rest(red.get('support_column'))})",
+        *lead_markdown(lead),
+        f"- Support columns (the preview's, solid, as printed): {column} ({_vs_rest(red.get('support_column'))})",
         f"- Support (prism estimate): {vol(m['support_prism'])} ({_vs_rest(red.get('support_prism'))})",
         f"- Printed: {turn_text(m)}" + ("; support counted as printed" if turned else ""),
         f"- Risky faces (past {m['overhang_angle']:.3g}°): {int(np.sum(m['risky']))} · "

@@ -1,10 +1,12 @@
 """What the panel's numbers mean, in words and human units.
 
 The search works in the model's own units; a user compares with a slicer,
-which speaks millimetres and grams. :func:`volume_text` turns a volume of the
-model into the printed one (the print frame's scale cubed) and its grams of
-filament; :func:`broken_rules` names the rule a pose breaks when the objective
-jumps by :data:`~supportless.search.objective.INFEASIBLE`.
+which speaks millimetres and grams. :func:`filament_text` says a length of
+filament and its grams (the figure the panel leads with,
+:mod:`supportless.apps.ui.filament`); :func:`volume_text` turns a volume of the
+model into the printed one (the print frame's scale cubed), with its grams as
+solid filament; :func:`broken_rules` names the rule a pose breaks when the
+objective jumps by :data:`~supportless.search.objective.INFEASIBLE`.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import numpy as np
 
 from ...files.printer import DEFAULT_DENSITY
 
-__all__ = ["broken_rules", "grams", "volume_text"]
+__all__ = ["broken_rules", "filament_text", "grams", "volume_text"]
 
 
 def grams(volume_mm3: float, density: float = DEFAULT_DENSITY) -> float:
@@ -21,7 +23,7 @@ def grams(volume_mm3: float, density: float = DEFAULT_DENSITY) -> float:
     return float(volume_mm3) * 1e-3 * density
 
 
-def volume_text(volume: float | None, scale: float) -> str:
+def volume_text(volume: float | None, scale: float, with_grams: bool = True) -> str:
     """A volume of the model as printed: ``"1,234 mm³ ≈ 1.5 g"``.
 
     Parameters
@@ -30,6 +32,8 @@ def volume_text(volume: float | None, scale: float) -> str:
         In the model's units cubed.
     scale : float
         Millimetres per model unit (the print frame's scale).
+    with_grams : bool
+        Also its grams as solid filament (off where a filament figure leads, so no second mass is read as it).
 
     Returns
     -------
@@ -42,8 +46,23 @@ def volume_text(volume: float | None, scale: float) -> str:
     mm3 = float(volume) * scale ** 3
     g = grams(mm3)
     rounded = float(f"{mm3:.3g}")
-    mm3_text = f"{rounded:,.0f}" if rounded >= 100 else f"{rounded:.3g}"
-    return f"{mm3_text} mm³ ≈ {g:.2f} g" if g < 1 else f"{mm3_text} mm³ ≈ {g:.1f} g"
+    mm3_text = f"{rounded:,.0f} mm³" if rounded >= 100 else f"{rounded:.3g} mm³"
+    if not with_grams:
+        return mm3_text
+    return f"{mm3_text} ≈ {g:.2f} g" if g < 1 else f"{mm3_text} ≈ {g:.1f} g"
+
+
+def filament_text(mm: float, g: float | None) -> str:
+    """A length of support filament and its mass: ``"4,685 mm ≈ 14.0 g"``, as the command line's summary rounds.
+
+    Parameters
+    ----------
+    mm : float
+        Filament length, mm.
+    g : float or None
+        Its mass, g (None when unknown: the length alone).
+    """
+    return f"{mm:,.0f} mm" if g is None else f"{mm:,.0f} mm ≈ {g:.1f} g"
 
 
 def broken_rules(objective, angles: np.ndarray, names: list[str] | None = None) -> list[str]:

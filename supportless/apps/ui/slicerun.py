@@ -99,7 +99,7 @@ class SliceRun:
         return t is not None and t.is_alive()
 
     def start(self, rest: tuple[np.ndarray, np.ndarray], posed: tuple[np.ndarray, np.ndarray], choice,
-              timeout: float | None = None) -> bool:
+              timeout: float | None = None, pose=None) -> bool:
         """Slice both meshes, each with and without supports, with ``choice``'s slicer.
 
         Parameters
@@ -109,6 +109,9 @@ class SliceRun:
         choice : supportless.slicing.choice.SlicerChoice
         timeout : float, optional
             Seconds for each slicer run (default: the slicer's own).
+        pose : object, optional
+            What ``posed`` is of (the app gives the pose and print rotation): handed back as the
+            report's ``pose``, so a figure is shown only with the pose it was measured on.
 
         Returns
         -------
@@ -124,12 +127,12 @@ class SliceRun:
             (folder / "choice.json").write_text(json.dumps(
                 {"engine": choice.engine, "support": choice.support, "cura_definitions": choice.cura_definitions,
                  "timeout": timeout}))
-            self._thread = threading.Thread(target=self._run, args=(folder,), name="supportless-ui-slice",
+            self._thread = threading.Thread(target=self._run, args=(folder, pose), name="supportless-ui-slice",
                                             daemon=True)
             self._thread.start()
             return True
 
-    def _run(self, folder: Path) -> None:
+    def _run(self, folder: Path, pose=None) -> None:
         try:
             self._proc = subprocess.Popen([sys.executable, "-m", "supportless.apps.ui.slicerun", str(folder)],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
@@ -139,7 +142,7 @@ class SliceRun:
                 return
             report_file, error_file = folder / "report.json", folder / "error.txt"
             if report_file.is_file():
-                self.on_done(json.loads(report_file.read_text()), None)
+                self.on_done(json.loads(report_file.read_text()) | ({} if pose is None else {"pose": pose}), None)
             elif error_file.is_file():
                 self.on_done(None, error_file.read_text().strip())
             else:
