@@ -198,6 +198,10 @@ def _summary_table(report: dict, verbose: bool = False):
         up = report["up"]
         table.add_row("printed turned by", "0°", f"{rot['angle_deg']:.0f}°",
                       f"model {[round(x, 2) for x in rot['printing_direction_in_model_frame']]} up, was {up}")
+        if report.get("footprint"):  # the first layer's contact (a turn rests on at least the bound)
+            fp = report["footprint"]
+            table.add_row("first layer on the plate", f"{fp['rest_mm2']:.0f} mm²", f"{fp['answer_mm2']:.0f} mm²",
+                          f"a turn rests on ≥ {fp['bound_mm2']:g} mm²")
         if verbose:
             table.add_row("estimate: support standing (prisms)", cm3(b["support_prism"]),
                           cm3(a["upright"]["support_prism"]),

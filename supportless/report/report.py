@@ -26,6 +26,7 @@ from ..energies.overhang import overhang_energy, risky_area, risky_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
+from ..energies.footprint import footprint_area
 from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
 from ..search.naturalness import naturalness
 from ..search.orientation import print_direction, rotation_axis_angle
@@ -209,7 +210,8 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         angles, runtime, settings and convergence history; ``choice``
         (:meth:`supportless.search.choice.Choice.to_dict`: every answer weighed, its
         kind, predicted and sliced support, and who chose which and why), or
-        None when the search's own best was returned unweighed.
+        None when the search's own best was returned unweighed; ``footprint``
+        (:func:`footprint_summary`: the plate contact of the rest pose and the answer).
 
         ``before`` is the rest pose as it stands; ``after`` is the found
         pose in its print orientation (support counted there), with
@@ -286,11 +288,24 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         "machine": f"{platform.machine()}, {_cpu_count()} cores, Python {platform.python_version()}",
     }
     report["contacts"] = contact_summary(rig, result, frame)
+    report["footprint"] = footprint_summary(rig, result, frame)
     report["rest_instead"] = result.stats.get("rest_instead")  # why the rest pose was written, when it was
     report["standing"] = standing_answer(result)
     report["skinning"] = skinning_label(rig)
     report["support"] = support_headline(report)
     return report
+
+
+def footprint_summary(rig, result, frame: PrintFrame) -> dict | None:
+    """What the prints rest on: ``rest_mm2`` (the rest pose as it stands), ``answer_mm2`` (the answer as printed),
+    the first layer's contact at the frame's height (:func:`~supportless.energies.footprint.footprint_area`), and
+    the search's ``bound_mm2`` for a turn; None in 2D."""
+    if rig.dim != 3:
+        return None
+    scale = frame.height_mm / float(np.ptp(rig.vertices @ rig.up))
+    return {"rest_mm2": round(float(footprint_area(rig.vertices, rig.faces, rig.up, scale)), 2),
+            "answer_mm2": round(float(footprint_area(result.print_vertices, rig.faces, rig.up, scale)), 2),
+            "bound_mm2": float(result.settings.footprint_mm2), "height_mm": float(frame.height_mm)}
 
 
 def _contact_title(report: dict | None) -> str:
