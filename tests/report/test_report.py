@@ -220,3 +220,15 @@ def test_a_character_of_touching_skins_is_written_a_closed_solid(shared_file, tm
         mesh = trimesh.load(tmp_path / name, force="mesh")
         assert mesh.is_watertight, name
         assert intersecting_face_pairs(mesh.vertices, mesh.faces) == 0
+
+
+def test_the_report_says_what_the_rest_pose_and_the_answer_rest_on(branch_rig, searched):
+    from supportless.energies.footprint import footprint_area
+
+    fp = build_report(branch_rig, searched)["footprint"]
+    scale = 60.0 / np.ptp(branch_rig.vertices @ branch_rig.up)
+    assert fp["answer_mm2"] == pytest.approx(footprint_area(searched.print_vertices, branch_rig.faces, branch_rig.up,
+                                                            scale), abs=0.01)
+    assert fp["rest_mm2"] == pytest.approx(footprint_area(branch_rig.vertices, branch_rig.faces, branch_rig.up,
+                                                          scale), abs=0.01)
+    assert fp["rest_mm2"] > 0 and fp["bound_mm2"] == 0.0 and fp["height_mm"] == 60.0
