@@ -11,7 +11,8 @@ tasks to a ``LocalCluster`` (one single-threaded worker per core, numba's
 threads set to one so workers do not oversubscribe the cores) or to an
 existing scheduler, skips models whose folder is complete (unless
 ``force``), and writes ``OUT/summary.csv`` after every finished model and a
-contact sheet at the end.
+contact sheet at the end. A local worker ends with the process that runs the
+batch (:func:`dask_setup`), however that process ends.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from typing import Callable
 from ..base.crash import advice, last_stage, recording_stages, stage
 from ..base.errors import InputError, SupportlessError
 from ..base.interrupt import pause_point
+from ..base.lifetime import end_with_parent
 from ..files.meshes import MESH_FORMATS, atomic_path, write_json
 
 __all__ = ["COLUMNS", "ModelSpec", "find_models", "finished_row", "run_batch", "run_model", "write_contact_sheet",
@@ -43,6 +45,9 @@ COLUMNS = ("model", "status", "reason", "predicted_before_mm", "predicted_after_
 
 #: Environment of each local worker: one thread for the BLAS, as each worker is one core (numba's: :func:`_one_numba_thread`).
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+#: Names, in a local worker's environment, the process the worker ends with (:func:`dask_setup`).
+PARENT_ENV = "SUPPORTLESS_BATCH_PARENT"
 
 #: How often the local scheduler retries a model whose worker died under it: a crash in native code
 #: comes back on the same model, so it is not retried (the row says the stage instead).
@@ -322,6 +327,19 @@ def write_contact_sheet(out: str | os.PathLike, rows: list[dict], columns: int =
     return path
 
 
+def dask_setup(worker) -> None:
+    """Dask's preload hook, run in each local worker as it starts: the worker ends with the batch's process.
+
+    That process started the worker (through its ``LocalCluster``'s nanny)
+    and named itself in :data:`PARENT_ENV`; a worker of a scheduler given
+    with ``--scheduler`` has no such name and stays its own
+    (:func:`supportless.base.lifetime.end_with_parent`).
+    """
+    parent = os.environ.get(PARENT_ENV)
+    if parent:
+        end_with_parent(int(parent))
+
+
 def _client(scheduler: str | None, workers: int | None):
     try:
         from dask.distributed import Client, LocalCluster
@@ -336,7 +354,8 @@ def _client(scheduler: str | None, workers: int | None):
 
     n = workers or os.cpu_count() or 1
     with dask.config.set({"distributed.scheduler.allowed-failures": WORKER_RETRIES}):
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, env=WORKER_ENV,
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               env={**WORKER_ENV, PARENT_ENV: str(os.getpid())}, preload=[__name__],
                                dashboard_address=None, silence_logs=50)  # rows say what failed
     return Client(cluster), cluster
 

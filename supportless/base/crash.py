@@ -10,7 +10,10 @@ The ``supportless`` executable therefore runs each command under
 through a pipe; the parent only waits. When the child dies of a signal the
 parent prints one line naming the signal and the last stage, and exits with
 :data:`EXIT_CRASHED` (the out-of-memory killer's SIGKILL is said as such).
-Ctrl-C reaches both; the parent leaves it to the child.
+The child lives and dies with the parent (:mod:`supportless.base.lifetime`):
+a Ctrl-C at the terminal reaches both and the parent leaves it to the
+child; a SIGINT or SIGTERM sent to the parent's PID alone is passed on; and
+when the parent ends, even of a ``kill -9``, the kernel ends the child.
 
 A batch worker has no supervising parent of its own: there :func:`stage` also
 writes the stage into a file (:func:`recording_stages`) that the batch reads
@@ -26,6 +29,9 @@ import signal
 import sys
 from pathlib import Path
 from typing import Callable, Iterator
+
+from .interrupt import interrupt_once
+from .lifetime import end_with_parent, held, release, wait_passing_on
 
 __all__ = ["CRASH_ENV", "EXIT_CRASHED", "STAGE_ENV", "advice", "last_stage", "recording_stages", "stage",
            "supervised"]
@@ -106,44 +112,40 @@ def supervised(command: Callable[[], object]) -> int:
     -------
     status : int
         The child's exit status, or :data:`EXIT_CRASHED` when it died of a
-        signal other than SIGINT (130, as the child would have said).
+        signal other than SIGINT (130, as the child would have said) and
+        SIGTERM (143).
+
+    Notes
+    -----
+    SIGINT and SIGTERM sent to this process alone are passed on to the
+    child, and the child ends when this process ends, even of a SIGKILL
+    (:mod:`supportless.base.lifetime`).
     """
     if not hasattr(os, "fork") or os.environ.get(STAGE_ENV):  # nowhere to fork, or supervised already
         return _run(command)
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
+    parent, mask = os.getpid(), held()  # until the wait, SIGINT and SIGTERM wait blocked (none lost)
     pid = os.fork()
     if pid == 0:  # the child: the command, with the terminal as it is; it never returns
-        code = 1
-        try:
-            os.close(read_end)
-            os.environ[STAGE_ENV] = str(write_end)
-            code = _run(command)
-        except BaseException:  # noqa: BLE001 - said as Python would, then the child ends
-            import traceback
-
-            traceback.print_exc()
-        finally:
-            os._exit(code)
+        _child(command, parent, mask, read_end, write_end)
     os.close(write_end)
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the child's to handle
     chunks = []
     try:
-        _, status = os.waitpid(pid, 0)  # not the pipe's end: a process the child started may still hold it
+        status = wait_passing_on(pid, mask)  # not the pipe's end: a process the child started may hold it
         os.set_blocking(read_end, False)
         while chunk := os.read(read_end, 4096):  # the few stage lines (far below a pipe's buffer)
             chunks.append(chunk)
     except BlockingIOError:  # all read
         pass
     finally:
-        signal.signal(signal.SIGINT, previous)
         os.close(read_end)
     if not os.WIFSIGNALED(status):
         return os.waitstatus_to_exitcode(status)
     sig = os.WTERMSIG(status)
-    if sig == signal.SIGINT:
-        return 130
+    if sig in _STOPPED:
+        return _STOPPED[sig]
     last = b"".join(chunks).decode(errors="replace").strip().splitlines()
     where = last[-1] if last else "starting"
     name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else f"signal {sig}"
@@ -151,6 +153,29 @@ def supervised(command: Callable[[], object]) -> int:
     sys.stderr.write(f"supportless: error: the command {why} while {where}; {advice(where)}\n")
     sys.stderr.flush()
     return EXIT_CRASHED
+
+
+#: The exit status of a command whose child ended of a stop signal, not of a crash: as a shell says it (128 + N).
+_STOPPED = {signal.SIGINT: 128 + signal.SIGINT, signal.SIGTERM: 128 + signal.SIGTERM}
+
+
+def _child(command: Callable[[], object], parent: int, mask: set[int], read_end: int, write_end: int) -> None:
+    """The forked child of :func:`supervised`: ``command`` run to its exit status, ending with the parent."""
+    code = 1
+    try:
+        release(mask)
+        end_with_parent(parent)
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, interrupt_once)  # a Ctrl-C that reaches it twice is one
+        os.close(read_end)
+        os.environ[STAGE_ENV] = str(write_end)
+        code = _run(command)
+    except BaseException:  # noqa: BLE001 - said as Python would, then the child ends
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        os._exit(code)
 
 
 def _run(command: Callable[[], object]) -> int:

@@ -7,7 +7,9 @@ runs the call in the child with its output silenced and its working folder
 a scratch folder (TetGen writes files there; the parent removes it even when
 the child dies, :mod:`supportless.base.scratch`), and sends the result back
 through a pipe. A crash, an exception or an exit in the child becomes one
-:class:`NativeFailure` in the parent.
+:class:`NativeFailure` in the parent. The child ends with its parent
+(:func:`supportless.base.lifetime.end_with_parent`): a killed tool leaves no
+native call running.
 
 Where ``fork`` does not exist the call runs in the process itself.
 """
@@ -20,6 +22,7 @@ import signal
 import sys
 import warnings
 
+from .lifetime import end_with_parent
 from .scratch import scratch_dir
 
 __all__ = ["NativeFailure", "run_beside", "run_isolated"]
@@ -102,12 +105,14 @@ def _fork_and_wait(fn, args, scratch, here=None, here_args=()):
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
+    parent = os.getpid()
     with warnings.catch_warnings():  # Python 3.12+ warns about fork with threads; the child only runs fn
         warnings.simplefilter("ignore", DeprecationWarning)
         pid = os.fork()
     if pid == 0:  # the child: never returns
         code = 0
         try:
+            end_with_parent(parent)  # this thread waits for the child: the kernel's "parent" lives as long
             os.close(read_end)
             _silence_and_run(fn, args, write_end, scratch)
         except BaseException:

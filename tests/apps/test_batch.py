@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from processes import linux_only
 
 import supportless as sl
 from supportless.apps.batch import COLUMNS, find_models, run_model
@@ -279,3 +280,28 @@ def test_a_rerun_removes_what_a_killed_run_left_even_under_names_with_brackets(t
     assert result.exit_code == 0, result.output
     assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
     assert _summary(out)["a[1]"]["status"] == "ok"
+
+
+@pytest.mark.slow
+@linux_only
+def test_kill_9_of_the_tool_ends_its_workers_too(folder, tmp_path):
+    """``kill -9`` of the ``supportless batch`` process alone (not its group): its child and the Dask workers
+    it started end with it, the worker paused at a model's last step included (none goes on to write it)."""
+    from conftest import until
+    from processes import descendants, gone
+
+    from supportless.base.interrupt import PAUSE_ENV
+
+    out, marker = tmp_path / "out", tmp_path / "paused"
+    proc = subprocess.Popen([str(EXE), "batch", str(folder), "-o", str(out), "--workers", "1", "-q",
+                             "--cache-dir", str(tmp_path / "cache"), *FAST],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env=dict(os.environ, **{PAUSE_ENV: f"rename arm/={marker}"}))
+    try:
+        assert until(lambda: marker.exists() or proc.poll() is not None, 600) and marker.exists()
+        below = descendants(proc.pid)
+        assert len(below) >= 2, below  # the supervised child and its worker at least
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+    assert until(lambda: all(gone(pid) for pid in below), 20), [pid for pid in below if not gone(pid)]

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import os
 import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
+from processes import gone, linux_only
 
 from supportless.base.isolated import NativeFailure, run_beside, run_isolated
 
@@ -78,3 +81,33 @@ def test_run_beside_runs_one_call_in_a_child_and_one_here_and_returns_both():
     np.testing.assert_array_equal(mine, [0, 2, 4, 6])
     with pytest.raises(NativeFailure, match="crashed"):  # the child's crash is the one failure, after here's part
         run_beside(_segfault, (), _double, (np.arange(2),), what="the slab check")
+
+
+_KILLED_TOOL = """
+import os, sys, time
+from pathlib import Path
+from supportless.base.isolated import run_isolated
+
+def native(marker):
+    Path(marker + ".tmp").write_text(str(os.getpid()))
+    os.replace(marker + ".tmp", marker)
+    while True:  # a native call that takes its time
+        time.sleep(60)
+
+run_isolated(native, sys.argv[1], what="TetGen")
+"""
+
+
+@linux_only
+def test_the_child_ends_when_the_tool_is_killed(tmp_path):
+    """``kill -9`` of the process that waits for a native call: the call's process ends too."""
+    from conftest import until
+
+    marker = tmp_path / "native"
+    proc = subprocess.Popen([sys.executable, "-c", _KILLED_TOOL, str(marker)])
+    try:
+        assert until(lambda: marker.exists() or proc.poll() is not None, 120) and marker.exists()
+    finally:
+        proc.kill()
+        proc.wait(timeout=60)
+    assert until(lambda: gone(int(marker.read_text())), 20), "the native call goes on without the tool"
