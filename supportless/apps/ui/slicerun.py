@@ -69,7 +69,7 @@ def slice_markdown(report: dict) -> str:
         "|---|---|---|",
         row("support filament", "support_mm", mm),
         row("support", "support_g", g),
-        row("print time added by support", "support_time_s", _duration),
+        row("whole print time, with supports", "total_time_s", _duration),
         row("whole print filament", "total_mm", mm),
     ])
 
