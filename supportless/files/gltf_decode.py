@@ -11,7 +11,7 @@ Models published on the web are compressed as a rule:
 
 :func:`decode_compressed` rewrites a loaded document so that every such
 accessor reads plain little-endian data from a new buffer appended to the
-list; the rest of :mod:`supportless.files.gltf` never sees the compression.
+list; the rest of :mod:`supportless.files.gltf_skin` never sees the compression.
 """
 
 from __future__ import annotations

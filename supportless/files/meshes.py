@@ -1,6 +1,7 @@
 """Reading and writing the files the tool works with.
 
-Surface meshes (OBJ, STL, PLY, OFF, GLB) go through trimesh, 3MF through
+Surface meshes (OBJ, STL, PLY, OFF, GLB) go through trimesh, a rigged GLB through
+:mod:`supportless.files.gltf_skin` (its skin poses it), 3MF through
 :mod:`supportless.files.threemf`; skeletons are libigl's TGF; precomputed volume
 meshes and weights are libigl's ``.mesh`` and ``.dmat``; poses are JSON
 (:mod:`supportless.files.posefile`). Every writer writes a temporary file next to the
@@ -12,17 +13,14 @@ triangle mesh, before it writes anything.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from ..base.errors import InputError
-from ..base.interrupt import pause_point
-from ..base.scratch import owner_tag, remove_leftovers
+from .paths import atomic_path
 from .skeleton import check_skeleton
 from .threemf import write_3mf
 
@@ -33,46 +31,6 @@ __all__ = [
 ]
 
 MESH_FORMATS = ("obj", "stl", "ply", "off", "3mf", "glb")
-
-
-# --------------------------------------------------------------------------- #
-# atomic writes
-# --------------------------------------------------------------------------- #
-@contextlib.contextmanager
-def atomic_path(path: str | os.PathLike):
-    """Yield a temporary path beside ``path``; rename it to ``path`` on success.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The final destination. Its folder is created if missing.
-
-    Yields
-    ------
-    tmp : pathlib.Path
-        Where to write. It keeps ``path``'s suffix so format sniffing by
-        extension still works. It is removed if the block raises.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    remove_leftovers(path.parent, f".{path.stem}.", path.suffix)  # of killed runs (supportless.base.scratch)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.{owner_tag()}-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp)
-    try:
-        yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
-        pause_point(f"rename {path.name}")
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def write_text(path: str | os.PathLike, text: str) -> None:
@@ -119,8 +77,9 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     ----------
     path : str or os.PathLike
         OBJ, STL, PLY, OFF, 3MF or GLB file. Scenes (3MF, GLB) are flattened
-        into one mesh with their transforms applied. Vertices that coincide
-        exactly are merged (STL stores a triangle soup).
+        into one mesh with their transforms applied; a rigged GLB is read in
+        the rest pose its skin gives (:func:`~supportless.files.gltf_skin.read_rest_triangles`).
+        Vertices that coincide exactly are merged (STL stores a triangle soup).
 
     Returns
     -------
@@ -142,7 +101,12 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
     ext = path.suffix.lower().lstrip(".")
     if ext not in MESH_FORMATS:
         raise InputError(path, f"unknown mesh format '.{ext}'; use one of {', '.join(MESH_FORMATS)}")
-    simple = _read_plain_obj(path) if ext == "obj" else None
+    if ext == "glb":  # a rigged character where its skin puts it, not where its bare mesh nodes would
+        from .gltf_skin import read_rest_triangles
+
+        simple = read_rest_triangles(path)
+    else:
+        simple = _read_plain_obj(path) if ext == "obj" else None
     if simple is not None:
         V, F = simple
     else:

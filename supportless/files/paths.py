@@ -1,13 +1,17 @@
-"""Output locations checked before any work: writable, and never one of the inputs."""
+"""Output locations: checked before any work (writable, and never one of the inputs), and written atomically."""
 
 from __future__ import annotations
 
+import contextlib
 import os
+import tempfile
 from pathlib import Path
 
 from ..base.errors import InputError
+from ..base.interrupt import pause_point
+from ..base.scratch import owner_tag, remove_leftovers
 
-__all__ = ["check_output_paths"]
+__all__ = ["atomic_path", "check_output_paths"]
 
 
 def _same_file(a: Path, b: Path) -> bool:
@@ -62,3 +66,40 @@ def check_output_paths(files=(), folders=(), inputs=()) -> None:
                 raise InputError(path, f"{option}: {folder} is a file, not a folder; choose another location")
             if not os.access(folder, os.W_OK | os.X_OK):
                 raise InputError(path, f"{option}: no permission to write in {folder}; choose another location")
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike):
+    """Yield a temporary path beside ``path``; rename it to ``path`` on success.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final destination. Its folder is created if missing.
+
+    Yields
+    ------
+    tmp : pathlib.Path
+        Where to write. It keeps ``path``'s suffix so format sniffing by
+        extension still works. It is removed if the block raises.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    remove_leftovers(path.parent, f".{path.stem}.", path.suffix)  # of killed runs (supportless.base.scratch)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.{owner_tag()}-", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
+        pause_point(f"rename {path.name}")
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
