@@ -134,7 +134,8 @@ class SliceRun:
 
     def _run(self, folder: Path, pose=None) -> None:
         try:
-            self._proc = subprocess.Popen([sys.executable, "-m", "supportless.apps.ui.slicerun", str(folder)],
+            self._proc = subprocess.Popen([sys.executable, "-m", "supportless.apps.ui.slicerun", str(folder),
+                                           str(os.getpid())],
                                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                           start_new_session=True)
             _, err = self._proc.communicate()
@@ -197,4 +198,8 @@ def _child(folder: Path) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover - run by SliceRun
+    from ...base.lifetime import end_with_parent
+
+    if len(sys.argv) > 2:  # the app's server: when it ends, however it ends, so does its slice
+        end_with_parent(int(sys.argv[2]))
     sys.exit(_child(Path(sys.argv[1])))
