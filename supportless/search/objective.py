@@ -346,13 +346,31 @@ class Objective:
         where the first layer's contact (:func:`~supportless.energies.footprint.footprint_area`, at
         :attr:`print_height_mm` tall) is under the bound, else 0; (P,) float64.
 
-        Only a turn is judged (``rotations`` given): the model as it stands rests as its maker made it.
+        Only a turn is judged (``rotations`` given and not the identity): the model as it stands rests as its maker
+        made it.
         """
         if self.footprint_mm2 is None or rotations is None or self.rig.dim != 3:
             return 0.0
-        turned = np.matmul(V, np.swapaxes(rotations, -1, -2))
-        area = footprint_area(turned, self.rig.faces, self.rig.up, self.print_height_mm / self.height)
-        return np.maximum(0.0, 1.0 - area / self.footprint_mm2)
+        if np.ndim(V) == 2:  # one pose
+            return float(self.footprint_shortfall(np.asarray(V)[None], np.asarray(rotations).reshape(1, *np.shape(rotations)[-2:]))[0])
+        R = np.broadcast_to(np.asarray(rotations, np.float64), (len(V), self.rig.dim, self.rig.dim))
+        shortfall = np.zeros(len(V))
+        turned = ~np.all(np.isclose(R, np.eye(self.rig.dim)), axis=(-2, -1))  # upright is the model as it stands
+        if np.any(turned):
+            printed = np.matmul(V[turned], np.swapaxes(R[turned], -1, -2))
+            area = footprint_area(printed, self.rig.faces, self.rig.up, self.print_height_mm / self.height)
+            shortfall[turned] = np.maximum(0.0, 1.0 - area / self.footprint_mm2)
+        return shortfall
+
+    def rests(self, angles: np.ndarray, rotation: np.ndarray) -> bool:
+        """Whether the pose ``angles (m, 3) float64`` turned by ``rotation (d, d) float64`` rests on at least
+        :attr:`footprint_mm2` of plate, measured on this objective's whole surface (True with no such rule, and for
+        the model as it stands). The search's gate of would-be bests: a proxy's coarser surface can rest on a
+        blunt tip where the full one rests on a point."""
+        if self.footprint_mm2 is None or self.rig.dim != 3:
+            return True
+        V = self.rig.pose(np.asarray(angles, np.float64))
+        return bool(self.footprint_shortfall(V[None], np.asarray(rotation, np.float64)[None])[0] == 0)
 
     def prior_cost(self, angles: np.ndarray, transforms: np.ndarray) -> np.ndarray:
         """The natural-pose prior: the joints' own turns (:class:`PosePrior`), plus ``w_chain`` times the

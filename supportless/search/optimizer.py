@@ -233,7 +233,7 @@ def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_
     proxy = settings.objective(coarse, full.arap_data, full.volume)
     with step("searching on the proxy"):
         found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
-                            intersects).run(t0)
+                            intersects, rests=full.rests).run(t0)
     with step(f"measuring the best poses on {len(rig.faces)} triangles"):
         chosen = on_full_surface(rig, found, full, t0)
     if not polish or chosen.interrupted:
@@ -265,7 +265,7 @@ class _PoseSearch:
     """
 
     def __init__(self, rig: Rig, settings: SearchSettings, objective: Objective, start, start_rotation, callback,
-                 intersects=None, polish_only: bool = False):
+                 intersects=None, polish_only: bool = False, rests=None):
         self.rig, self.settings, self.objective, self.callback = rig, settings, objective, callback
         self.start, self.start_rotation = start, start_rotation
         self.base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
@@ -285,6 +285,7 @@ class _PoseSearch:
         self.total = settings.iterations * len(self.turns) + self.polishing
         self.overlapping: set = set()  # positions of the last batch whose ray grid saw two layers: they intersect
         self.intersects = intersects if intersects is not None else objective.forbidden
+        self.rests = rests if rests is not None else objective.rests  # the plate contact, on the full surface
         self.seeds = seed_params(rig.vertices, rig.faces, rig.up, settings.orient_seeds, objective.overhang_angle) \
             if self.turning and not polish_only else None
 
@@ -302,19 +303,29 @@ class _PoseSearch:
         return o, to_angles, to_rotation
 
     def feasible(self):
-        """The gate of would-be bests (None when off): False for a position whose pose intersects itself."""
-        if not (self.settings.exact_intersections and self.rig.dim == 3):
+        """The gate of would-be bests (None when off): False for a position whose pose intersects itself, or
+        whose turn rests on less plate than the footprint rule's bound (judged on the full surface)."""
+        exact_on = bool(self.settings.exact_intersections and self.rig.dim == 3)
+        footprint_on = bool(self.turning and self.objective.footprint_mm2 and self.rig.dim == 3)
+        if not (exact_on or footprint_on):
             return None
-        k, layout = self.k, self.layout
+        k, layout, up = self.k, self.layout, self.rig.up
         exact = _Timed(lambda x: self.intersects(layout.to_angles(x[None, :k])[0]), self.stats, "exact")
+        rests = _Timed(lambda x: self.rests(layout.to_angles(x[None, :k])[0], rotations_from_params(x[None, k:], up)[0]),
+                       self.stats, "footprint")
 
-        def no_intersection(x):
+        def gate(x):
+            if footprint_on and len(x) > k and not rests(x):
+                self.stats["footprint_rejections"] = self.stats.get("footprint_rejections", 0) + 1
+                return False
+            if not exact_on:
+                return True
             if x.tobytes() in self.overlapping:  # the ray grid saw two layers: no need to ask CGAL
                 self.stats["overlap_rejections"] += 1
                 return False
             return not exact(x)
 
-        return no_intersection
+        return gate
 
     def run_phase(self, turns, initial, particles, offset, optimizer=None, iterations=None, label=None, **options):
         """One optimiser run from the positions ``initial``, its iterations counted from ``offset``."""
