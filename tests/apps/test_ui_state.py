@@ -373,7 +373,7 @@ def test_keep_orientation_prints_as_it_stands(state, branch_rig):
 def test_every_bone_fixed_still_turns_the_model(state, branch_rig):
     state.set_bone_angles(branch_rig.bone_count - 1, [0.0, 0.0, 20.0])
     pose = state.get_angles()
-    assert state.start_optimize(fix="all", particles=6, iterations=2)
+    assert state.start_optimize(fix="all", particles=6, iterations=2, footprint_mm2=0.0)  # its turns rest on edges
     assert state.wait_optimize(300)
     assert np.array_equal(state.get_angles(), pose)
     assert _is_rotation(state.get_rotation()) and not np.allclose(state.get_rotation(), np.eye(3))
