@@ -315,5 +315,8 @@ def test_a_turn_resting_on_less_than_the_bound_breaks_a_rule_and_standing_as_mad
     taller = sl.Objective(rig, footprint_mm2=4 * area, print_height_mm=120.0)
     area_120 = float(footprint_area(V @ on_back[0].T, rig.faces, rig.up, 120.0 / np.ptp(V @ rig.up)))
     assert taller.terms(rest, on_back)["violation"][0] == pytest.approx(max(0.0, 1 - area_120 / (4 * area)))
-    # the search's bounded evaluation breaks the rule the same way
+    # the search's bounded evaluation breaks the rule the same way, and its gate of would-be bests too
     assert strict.bounded(rest, np.array([np.inf]), on_back)[0] > INFEASIBLE
+    assert not strict.rests(rest[0], on_back[0]) and lenient.rests(rest[0], on_back[0])
+    assert strict.rests(rest[0], np.eye(3))  # upright: the model as it stands
+    assert strict.terms(rest, np.eye(3)[None])["violation"][0] == 0
