@@ -36,7 +36,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..files.printer import PrinterProfile
 
-__all__ = ["BONE_SAMPLES", "DEFAULT_MATERIAL", "GRAVITY", "HANDLING_LOAD_N", "MATERIALS", "MAX_PLANES", "Material",
+__all__ = ["BONE_SAMPLES", "DEFAULT_MATERIAL", "GRAVITY", "HANDLING_LOAD_N", "HELD_SHARE", "MATERIALS", "MAX_PLANES", "Material",
            "Section", "Strength", "analyse_strength", "chain_ends", "effective_strength", "grip_stress",
            "layer_sections", "material_of", "section_moments"]
 
@@ -47,6 +47,9 @@ GRAVITY = 9.81
 #: Horizontal planes cut at most: the layers are analysed every ``height / MAX_PLANES`` when that is thicker than
 #: a printed layer.
 MAX_PLANES = 240
+#: The part of the body within this share of its height over the plate is held (the feet of a standing figure,
+#: the back of one lying down): a hand holds a figure by what it stands on, not by its first layer alone.
+HELD_SHARE = 0.05
 #: Where each bone is cut square to itself, as fractions of its length from its first joint.
 BONE_SAMPLES = (0.15, 0.5, 0.85)
 #: A chain's end is its branching joint when the branch is this close (a share of the body's height) to each of
@@ -177,9 +180,17 @@ def _central(moments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _edges(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(edges (e, 2) int64, face_edges (f, 3) int64)``: the unique edges and each face's edges (v0v1, v1v2, v2v0)."""
     F = np.asarray(faces, np.int64)
-    pairs = np.sort(np.stack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1).reshape(-1, 2), axis=1)
-    edges, inverse = np.unique(pairs, axis=0, return_inverse=True)
-    return edges, inverse.reshape(-1, 3)
+    a = np.stack([F[:, 0], F[:, 1], F[:, 2]], axis=1).ravel()
+    b = np.stack([F[:, 1], F[:, 2], F[:, 0]], axis=1).ravel()
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    keys, inverse = np.unique(lo * (int(F.max()) + 1) + hi, return_inverse=True)
+    n = int(F.max()) + 1
+    return np.stack([keys // n, keys % n], axis=1), inverse.reshape(-1, 3)
+
+
+def _two_of_three(crosses: np.ndarray) -> np.ndarray:
+    """(k, 2) int64: the positions of the two True of each row of ``crosses (k, 3) bool`` (exactly two each)."""
+    return np.stack([np.where(crosses[:, 0], 0, 1), np.where(crosses[:, 2], 2, 1)], axis=1)
 
 
 def _winding(points: np.ndarray, first: np.ndarray, second: np.ndarray, group: np.ndarray, count: int) -> np.ndarray:
@@ -281,8 +292,7 @@ def layer_sections(vertices: np.ndarray, faces: np.ndarray, planes: np.ndarray) 
     seg_layer = f0[seg_face] + np.arange(len(seg_face)) - seg_offset[seg_face]
     fe = face_edges[seg_face]  # (S, 3)
     crosses = (k0[fe] <= seg_layer[:, None]) & (seg_layer[:, None] < k1[fe])
-    order = np.argsort(~crosses, axis=1, kind="stable")[:, :2]
-    pick = np.take_along_axis(fe, order, axis=1)
+    pick = np.take_along_axis(fe, _two_of_three(crosses), axis=1)
     ends = offset[pick] + seg_layer[:, None] - k0[pick]  # (S, 2) node ids
     n1, n2 = ends[:, 0], ends[:, 1]
     normal = np.cross(V[F[seg_face, 1]] - V[F[seg_face, 0]], V[F[seg_face, 2]] - V[F[seg_face, 0]])
@@ -586,7 +596,7 @@ class Strength:
 def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, bones: np.ndarray,
                      face_bones: np.ndarray | None = None, material: Material | None = None,
                      load_n: float = HANDLING_LOAD_N, layer_mm: float = 0.2, max_planes: int = MAX_PLANES,
-                     ends: np.ndarray | None = None) -> Strength:
+                     ends: np.ndarray | None = None, held_mm: float | None = None) -> Strength:
     """The weakest sections of a closed body as printed, under its weight and a grip at one chain end at a time.
 
     Parameters
@@ -605,7 +615,9 @@ def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray
     load_n : float
         The grip at a chain end, N.
     layer_mm : float
-        The printed layer: the part within a layer of the plate is held; planes are never closer.
+        The printed layer: planes are never closer.
+    held_mm : float, optional
+        The part within this height of the plate is held; :data:`HELD_SHARE` of the height when not given.
     max_planes : int
         Horizontal planes at most.
     ends : (e,) int64, optional
@@ -627,12 +639,13 @@ def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray
     weight_per_mm3 = mat.density * GRAVITY * 1e-6  # N/mm³
     face_safety = np.full(len(F), np.inf)
     sections = []
+    held = max(float(layer_mm), HELD_SHARE * height) if held_mm is None else float(held_mm)
     spacing = max(float(layer_mm), height / max(int(max_planes), 1))
-    planes = np.arange(z0 + layer_mm, z1, spacing)
+    planes = np.arange(z0 + held, z1, spacing)
     if len(planes):
         sections += _layer_verdicts(V, layer_sections(V, F, planes), labels, ends, Jt[ends], mat,
                                     weight_per_mm3, load_n)
-    sections += _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, z0 + layer_mm)
+    sections += _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, z0 + held)
     sections.sort(key=lambda s: s.safety_factor)
     for s in sections:
         face_safety[s.faces] = np.minimum(face_safety[s.faces], s.safety_factor)
@@ -774,10 +787,14 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
     below_root, loads_below = _sweep(cut, grips, held, downward=False)
     z0 = float(V[:, 2].min())
     out = []
+    la_k, lb_k = [{} for _ in cut.planes], [{} for _ in cut.planes]
+    for (kk, r), v in loads_above.items():
+        la_k[kk][r] = v
+    for (kk, r), v in loads_below.items():
+        lb_k[kk][r] = v
     for k in range(len(cut.planes)):
         sections = np.flatnonzero(cut.layer == k)
-        la = {r: v for (kk, r), v in loads_above.items() if kk == k}
-        lb = {r: v for (kk, r), v in loads_below.items() if kk == k}
+        la, lb = la_k[k], lb_k[k]
         for s, sign, (volume, moment, shares) in _carry(sections, cut.area, above_root, below_root, la, lb):
             c3 = np.array([cut.centroid[s, 0], cut.centroid[s, 1], cut.planes[k]])
             weight = np.array([0.0, 0.0, -weight_per_mm3 * volume]) if volume > 0 else None
@@ -793,26 +810,27 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
     return out
 
 
-def _plane_outline(V, F, edges, face_edges, origin, basis):
+def _plane_outline(V, F, edges, face_edges, origin, basis, faces=None):
     """The outline round ``origin`` of the section of a closed surface by the plane through it square to
     ``basis[2]``: ``(points (q, 2), area, J (2, 2), centroid (3,), faces)`` in the basis's ``(e1, e2)`` about the
-    centroid; None where no outline encloses ``origin``."""
+    centroid; None where no closed outline encloses ``origin``. Only ``faces`` (indices) are cut when given: an
+    outline they leave open is not one."""
     d = (V - origin) @ basis[2]
     below = d < 0
-    crossing_edge = below[edges[:, 0]] != below[edges[:, 1]]
-    fb = below[F]
-    cut_faces = np.flatnonzero(fb.any(axis=1) & ~fb.all(axis=1))
+    candidates = np.arange(len(F)) if faces is None else faces
+    fb = below[F[candidates]]
+    cut_faces = candidates[fb.any(axis=1) & ~fb.all(axis=1)]
     if not len(cut_faces):
         return None
-    node_of_edge = np.cumsum(crossing_edge) - 1
-    ce = np.flatnonzero(crossing_edge)
-    a, b = V[edges[ce, 0]], V[edges[ce, 1]]
-    t = d[edges[ce, 0]] / (d[edges[ce, 0]] - d[edges[ce, 1]])
-    xyz = a + t[:, None] * (b - a) - origin
-    xy = xyz @ basis[:2].T
     fe = face_edges[cut_faces]
-    order = np.argsort(~crossing_edge[fe], axis=1, kind="stable")[:, :2]
-    pick = node_of_edge[np.take_along_axis(fe, order, axis=1)]
+    ce, local = np.unique(fe, return_inverse=True)
+    local = local.reshape(-1, 3)
+    crossing = below[edges[ce, 0]] != below[edges[ce, 1]]
+    a, b = V[edges[ce, 0]], V[edges[ce, 1]]
+    da, db = d[edges[ce, 0]], d[edges[ce, 1]]
+    t = np.where(crossing, da / np.where(crossing, da - db, 1.0), 0.0)
+    xy = (a + t[:, None] * (b - a) - origin) @ basis[:2].T
+    pick = np.take_along_axis(local, _two_of_three(crossing[local]), axis=1)
     n1, n2 = pick[:, 0], pick[:, 1]
     normal = np.cross(V[F[cut_faces, 1]] - V[F[cut_faces, 0]], V[F[cut_faces, 2]] - V[F[cut_faces, 0]])
     along = np.cross(basis[2], normal) @ basis[:2].T
@@ -821,14 +839,17 @@ def _plane_outline(V, F, edges, face_edges, origin, basis):
     n_loops, loop_of = connected_components(sp.coo_matrix((np.ones(len(n1)), (n1, n2)), shape=(len(ce),) * 2),
                                             directed=False)
     seg_loop = loop_of[n1]
+    degree = np.bincount(n1, minlength=len(ce)) + np.bincount(n2, minlength=len(ce))
+    open_ = np.zeros(n_loops, bool)
+    open_[loop_of[crossing & (degree != 2)]] = True
     m = section_moments(xy[n1], xy[n2], seg_loop, n_loops)
     w = _winding(np.zeros((1, 2)), xy[n1], xy[n2], seg_loop, n_loops)[:, 0]
-    enclosing = np.flatnonzero((w != 0) & (m[:, 0] > 0))
+    enclosing = np.flatnonzero((w != 0) & (m[:, 0] > 0) & ~open_)
     if not len(enclosing):
         return None
     loop = enclosing[np.argmin(m[enclosing, 0])]
     A, c, J = _central(m[loop:loop + 1])
-    pts = xy[loop_of == loop] - c[0]
+    pts = xy[crossing & (loop_of == loop)] - c[0]
     centroid = origin + c[0] @ basis[:2]
     return pts, float(A[0]), J[0], centroid, cut_faces[seg_loop == loop]
 
@@ -855,6 +876,7 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
         adjacency.setdefault(int(ja), []).append((i, int(jb)))
         adjacency.setdefault(int(jb), []).append((i, int(ja)))
     edges, face_edges = _edges(F)
+    by_bone = _split(np.arange(len(F)), labels, m)
     z0 = float(V[:, 2].min())
     out = []
     for i, (ja, jb) in enumerate(B):
@@ -884,10 +906,16 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
         free_list = np.array(sorted(free_bones), np.int64)
         base_volume = bone_volume[free_list].sum() if len(free_list) else 0.0
         base_moment = bone_moment[free_list].sum(axis=0) if len(free_list) else np.zeros(3)
-        own = np.flatnonzero(labels == i)
+        own = by_bone[i]
+        ring = {i}
+        for _ in range(2):  # the bones within two joints: a limb's outline lies on their faces
+            ring |= {bone for k in ring for j in B[k] for bone, _ in adjacency.get(int(j), [])}
+        nearby = np.concatenate([by_bone[k] for k in sorted(ring)])
         for frac in BONE_SAMPLES:
             origin = Jt[near] + frac * (Jt[far] - Jt[near])
-            outline = _plane_outline(V, F, edges, face_edges, origin, basis)
+            outline = _plane_outline(V, F, edges, face_edges, origin, basis, nearby)
+            if outline is None:
+                outline = _plane_outline(V, F, edges, face_edges, origin, basis)
             if outline is None:
                 continue
             pts, area, J2, centroid, faces = outline

@@ -1,0 +1,85 @@
+"""How strong a pose prints: :func:`~supportless.energies.strength.analyse_strength` of a rig posed and turned.
+
+The body is analysed as it goes to the slicer: posed, turned, on the plate, +Z up, in millimetres at the printed
+height (the rest pose's height along up, as the print frame scales it), each face following the bone with the
+most skinning weight on it, the skeleton posed with it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..base.geometry import place_on_plate, print_pose
+from ..energies.strength import HANDLING_LOAD_N, Material, Strength, analyse_strength
+from ..files.printframe import rotation_to_z
+from ..rig.rig import Rig
+
+__all__ = ["face_bones", "pose_strength", "printed_body"]
+
+
+def face_bones(rig: Rig) -> np.ndarray:
+    """(f,) int64: the bone with the most skinning weight over each face's corners."""
+    W = rig.weights
+    if hasattr(W, "toarray"):
+        W = W.toarray()
+    return np.asarray(W)[rig.faces].sum(axis=1).argmax(axis=1)
+
+
+def printed_body(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The surface and skeleton of a pose as printed: +Z up, mm, the lowest point at z = 0.
+
+    Parameters
+    ----------
+    rig : Rig
+        3D.
+    angles : (m, 3) float64
+    rotation : (3, 3) float64
+        The print rotation (:func:`~supportless.base.geometry.print_pose`).
+    height_mm : float
+        The rest pose's printed height along ``rig.up``.
+
+    Returns
+    -------
+    vertices : (n, 3) float64
+    joints : (j, 3) float64
+    """
+    up = np.asarray(rig.up, np.float64)
+    posed = rig.pose(angles)
+    joints = rig.posed_joints(angles)
+    low = (posed @ up).min()
+    placed, joints = posed - low * up, joints - low * up
+    R = np.asarray(rotation, np.float64)
+    printed = print_pose(placed, R, up)
+    shift = printed[0] - placed[0] @ R.T
+    joints = joints @ R.T + shift
+    to_z = rotation_to_z(up) * (float(height_mm) / float(np.ptp(rig.vertices @ up)))
+    return printed @ to_z.T, joints @ to_z.T
+
+
+def pose_strength(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm: float,
+                  material: Material | None = None, load_n: float = HANDLING_LOAD_N,
+                  layer_mm: float = 0.2) -> Strength | None:
+    """The strength of a pose as printed (:func:`~supportless.energies.strength.analyse_strength`); None in 2D.
+
+    Parameters
+    ----------
+    rig : Rig
+    angles : (m, 3) float64
+    rotation : (3, 3) float64
+    height_mm : float
+    material : Material, optional
+    load_n : float
+        The grip at each chain end, N.
+    layer_mm : float
+        The printed layer's height, mm.
+    """
+    if rig.dim != 3:
+        return None
+    V, J = printed_body(rig, angles, rotation, height_mm)
+    return analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n, layer_mm)
+
+
+def rest_placed(rig: Rig) -> np.ndarray:
+    """(n, 3) float64: the rest pose on the plate (the display frame)."""
+    return place_on_plate(rig.vertices, rig.up)
