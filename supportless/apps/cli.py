@@ -29,7 +29,7 @@ from .cli_common import (
     EXIT_MISSING_TOOL,
     EXIT_WRITE_FAILED,
     UP_HELP,
-    _check_bones_early, _console, _contact_line, _print_choice,
+    _check_bones_early, _console, _contact_line, _print_choice, strength_rows,
     _fail,
     _Group,
     _load,
@@ -193,6 +193,8 @@ def _summary_table(report: dict, verbose: bool = False):
         table.add_row("named joint nearest its range", "", f"{use['angle_deg']:.0f}° of {use['limit_deg']:.0f}°",
                       f"{use['joint']} ({use['measure']})"
                       + (f", {use['outside_deg']:.0f}° outside" if use["outside_deg"] >= 0.5 else ""))
+    for row in strength_rows(report):
+        table.add_row(*row)
     rot = report.get("print_rotation")
     if rot and rot["angle_deg"] >= 0.5:  # a turn that shows in whole degrees
         up = report["up"]

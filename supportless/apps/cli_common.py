@@ -206,6 +206,10 @@ def _search_options(f):
                      default=d.footprint_mm2, show_default=True,
                      help="With --orient free, the least area a turned print's first layer rests on, mm² at the "
                           "printed size: a turn onto a tip or an edge is refused (0: no such rule)."),
+        click.option("--min-safety", "min_safety", type=click.FloatRange(*RANGES["min_safety"]),
+                     default=d.min_safety, show_default=True,
+                     help="The answer is never weaker than both the rest pose (as it stands) and this safety factor "
+                          "(strength over the stress of a 2 N grip at a hand, head or tail; 0: strength not weighed)."),
         click.option("--limit", "limits", multiple=True,
                      help="Per-bone joint limit BONE=DEGREES (1-based): --limit 5=15 --limit 7=10."),
         click.option("--anatomy/--no-anatomy", default=d.anatomy, show_default=True,
@@ -243,8 +247,11 @@ def _settings(profile=None, **options):
     """
     from ..search.settings import SearchSettings
 
+    from ..energies.materials import material_of
+
     if options.get("overhang_angle", 0.0) is None:
         options["overhang_angle"] = (profile or _printer_profile(None)).overhang_angle
+    options.setdefault("material", material_of(profile).name)  # strength is judged in the profile's filament
     return SearchSettings(**options)  # bad values are InputError: one line
 
 
@@ -336,6 +343,22 @@ def _check_bones_early(settings, model, skeleton) -> None:
         settings.check_bones(len(read_tgf(tgf)[1]))
 
 
+def strength_rows(report: dict) -> list[tuple[str, str, str, str]]:
+    """The summary table's strength row: the safety factors of the rest pose and the answer, and the answer's
+    weakest section in a line (:func:`~supportless.report.report.strength_line`)."""
+    from ..report.report import strength_line
+
+    s = report.get("strength")
+    if not s:
+        return []
+
+    def factor(part):
+        return "never pulled" if s[part]["safety_factor"] is None else f"{s[part]['safety_factor']:.2f}"
+
+    return [(f"safety factor ({s['material']['name']}, {s['load_n']:g} N grip)", factor("rest"), factor("answer"),
+             strength_line(s) or "")]
+
+
 def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
     """One line per answer weighed, and who chose."""
     for i, c in enumerate(choice.candidates):
@@ -346,3 +369,8 @@ def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
     who = label if choice.by == "slicer" else "the slicer model" + \
         ("" if slicer_tried else f" ({label} not found or not asked for: nothing sliced)")
     console.print(f"  chosen by {who}: {choice.reason}")
+    refused = (choice.strength or {}).get("refused") or []
+    if refused:
+        console.print(f"  left out as weaker than the rest pose (safety {choice.strength['rest_safety_factor']}) and "
+                      f"{choice.strength['floor']:g}: " + ", ".join(
+                          f"{r['kind']} {r['predicted_mm']:.0f} mm (safety {r['safety_factor']})" for r in refused))

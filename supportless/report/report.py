@@ -27,14 +27,17 @@ from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
 from ..energies.footprint import footprint_area
+from ..energies.materials import MATERIALS
+from ..energies.strength import HANDLING_LOAD_N, Strength
 from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
 from ..search.naturalness import naturalness
 from ..search.orientation import print_direction, rotation_axis_angle
+from ..search.sturdiness import pose_strength
 from .render import plot_convergence, render_before_after
 
 __all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "filament_grams", "pose_measures",
-           "predicted_filament_mm", "predicted_slicer", "reduction", "slicer_label", "support_headline",
-           "write_pictures"]
+           "predicted_filament_mm", "predicted_slicer", "reduction", "slicer_label", "strength_line",
+           "strength_summary", "support_headline", "weakest_section", "write_pictures"]
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
@@ -211,7 +214,8 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         (:meth:`supportless.search.choice.Choice.to_dict`: every answer weighed, its
         kind, predicted and sliced support, and who chose which and why), or
         None when the search's own best was returned unweighed; ``footprint``
-        (:func:`footprint_summary`: the plate contact of the rest pose and the answer).
+        (:func:`footprint_summary`: the plate contact of the rest pose and the answer); ``strength``
+        (:func:`strength_summary`: the weakest section of the rest pose and of the answer as printed).
 
         ``before`` is the rest pose as it stands; ``after`` is the found
         pose in its print orientation (support counted there), with
@@ -289,6 +293,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     }
     report["contacts"] = contact_summary(rig, result, frame)
     report["footprint"] = footprint_summary(rig, result, frame)
+    report["strength"] = strength_summary(rig, result, frame)
     report["rest_instead"] = result.stats.get("rest_instead")  # why the rest pose was written, when it was
     report["standing"] = standing_answer(result)
     report["skinning"] = skinning_label(rig)
@@ -306,6 +311,47 @@ def footprint_summary(rig, result, frame: PrintFrame) -> dict | None:
     return {"rest_mm2": round(float(footprint_area(rig.vertices, rig.faces, rig.up, scale)), 2),
             "answer_mm2": round(float(footprint_area(result.print_vertices, rig.faces, rig.up, scale)), 2),
             "bound_mm2": float(result.settings.footprint_mm2), "height_mm": float(frame.height_mm)}
+
+
+def strength_summary(rig, result, frame: PrintFrame) -> dict | None:
+    """How strong the rest pose (as it stands) and the answer (as printed) are: ``rest`` and ``answer`` (each
+    :func:`weakest_section`), the choice's ``floor`` (``settings.min_safety``), the ``material`` and the grip
+    ``load_n``; None in 2D."""
+    if rig.dim != 3:
+        return None
+    material = MATERIALS[result.settings.material]
+    height = float(frame.height_mm)
+    names = rig.bone_names()
+    rest = pose_strength(rig, rig.rest_angles(), np.eye(3), height, material)
+    answer = pose_strength(rig, result.angles, np.asarray(result.rotation, np.float64), height, material)
+    return {"rest": weakest_section(rest, names), "answer": weakest_section(answer, names),
+            "floor": float(result.settings.min_safety), "material": material.to_dict(), "load_n": HANDLING_LOAD_N}
+
+
+def weakest_section(strength: Strength, names: list[str]) -> dict:
+    """A body's weakest section as JSON values: ``safety_factor`` (None: nothing pulls it), and ``weakest``:
+    ``bone`` (its name), ``height_mm`` over the plate, ``direction`` (``"across"`` or ``"along"`` the layers),
+    ``breaks_at_n`` (the grip that breaks it, None: none does), ``stress_mpa``, ``strength_mpa``, ``area_mm2``,
+    ``section`` (``"layer"``: a horizontal cut, ``"bone"``: square to the bone)."""
+    w = strength.weakest
+    if w is None or not np.isfinite(w.safety_factor):
+        return {"safety_factor": None, "weakest": None}
+    return {"safety_factor": round(float(w.safety_factor), 3), "weakest": {
+        "bone": names[w.bone] if 0 <= w.bone < len(names) else None, "height_mm": round(w.height_mm, 1),
+        "direction": "across" if w.across else "along",
+        "breaks_at_n": round(w.breaks_at_n, 2) if np.isfinite(w.breaks_at_n) else None,
+        "stress_mpa": round(w.stress_mpa, 2), "strength_mpa": round(w.strength_mpa, 2),
+        "area_mm2": round(w.area_mm2, 2), "section": w.kind}}
+
+
+def strength_line(summary: dict | None) -> str | None:
+    """The summary's one line: ``weakest: LeftLeg 7 mm up, across the layers, breaks at 0.9 N`` (the answer's)."""
+    if not summary or not summary["answer"]["weakest"]:
+        return None
+    w = summary["answer"]["weakest"]
+    bone = (w["bone"] or "?").split(":")[-1]
+    breaks = "never breaks under a grip" if w["breaks_at_n"] is None else f"breaks at {w['breaks_at_n']:.1f} N"
+    return f"weakest: {bone} {w['height_mm']:.0f} mm up, {w['direction']} the layers, {breaks}"
 
 
 def _contact_title(report: dict | None) -> str:

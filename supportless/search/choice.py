@@ -29,14 +29,16 @@ from ..base.geometry import place_on_plate
 from ..copyleft.cgal import intersecting_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.footprint import footprint_area
+from ..energies.materials import MATERIALS
 from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .objective import POSED_VERTICES
 from .result import PoseResult, measured_at, written_verdict
+from .sturdiness import pose_strength
 
 __all__ = ["CHECKS_PER_KIND", "KINDS", "PER_KIND", "PREDICTION_TOLERANCE", "Candidate", "Choice", "candidate_answers", "choose", "pool_of", "print_distance_deg",
-           "choose_by_model"]
+           "choose_by_model", "strong_enough"]
 
 #: The kinds of answer, the search's own first: ``"pose and turn"`` (the
 #: search's best and its other good poses), ``"pose"`` (the pose phase's,
@@ -91,6 +93,8 @@ class Candidate:
     sliced_mm: float | None = None
     same_as: int | None = None
     footprint_mm2: float | None = None
+    safety_factor: float | None = None
+    breaks_at_n: float | None = None
 
     @property
     def turned(self) -> bool:
@@ -125,6 +129,10 @@ class Choice:
         model's direction that prints upward).
     model_chosen : int
         The slicer model's choice (``chosen`` until a slicer chooses).
+    strength : dict or None
+        How strength weighed (:func:`strong_enough`): ``rest_safety_factor``, ``floor``, ``refused`` (the
+        answers left out, each a dict of ``kind``, ``predicted_mm``, ``safety_factor``, ``breaks_at_n``) and
+        ``changed_choice`` (the slicer model would have chosen one of them); None when strength was not weighed.
     """
 
     candidates: list[Candidate]
@@ -137,6 +145,7 @@ class Choice:
     slicer_height_mm: float | None = None
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
     model_chosen: int = -1
+    strength: dict | None = None
 
     def __post_init__(self):
         if self.model_chosen < 0:
@@ -156,13 +165,20 @@ class Choice:
                 "sliced_mm": None if c.sliced_mm is None else round(c.sliced_mm, 1),
                 "turned": c.turned,
                 "footprint_mm2": None if c.footprint_mm2 is None else round(c.footprint_mm2, 1),
+                "safety_factor": _rounded(c.safety_factor, 2), "breaks_at_n": _rounded(c.breaks_at_n, 2),
                 "up": np.round(c.result.rotation.T @ self.up, 3).tolist(),
                 "same_as": None if c.same_as is None else c.same_as + 1,
                 "distance_deg": round(pose_distance_deg(c.result.angles, c.result.rotation, chosen.angles,
                                                         chosen.rotation), 1),
                 "chosen": i == self.chosen, "model_choice": i == self.model_chosen,
             } for i, c in enumerate(self.candidates)],
+            "strength": self.strength,
         }
+
+
+def _rounded(x: float | None, digits: int) -> float | None:
+    """``x`` rounded for JSON; None stays None, infinity (nothing pulls) becomes None."""
+    return None if x is None or not np.isfinite(x) else round(float(x), digits)
 
 
 def print_distance_deg(angles_a: np.ndarray, rotation_a: np.ndarray, angles_b: np.ndarray, rotation_b: np.ndarray,
@@ -229,9 +245,12 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     -------
     candidates : list of Candidate
         :data:`KINDS` in order, the search's result first; a copy of an
-        answer of the same kind is left out, of another kind marked ``same_as``.
+        answer of the same kind is left out, of another kind marked ``same_as``;
+        turns resting on a tip (:func:`resting_on_area`) and answers too weak (:func:`strong_enough`) left out.
     rest_mm : float
         Predicted support of the rest pose as it stands, mm.
+    strength : dict or None
+        As :attr:`Choice.strength`, with ``refused`` a list of the Candidates left out.
     """
     picked: list[tuple[str, PoseResult, int | None]] = []  # (kind, answer, the answer it copies)
     for kind in KINDS:
@@ -268,6 +287,7 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     candidates = [Candidate(kind, r, float(p), same_as=j, footprint_mm2=float(footprint_area(
         r.print_vertices, rig.faces, up, scale)) if rig.dim == 3 else None) for (kind, r, j), p in zip(picked, predicted[1:])]
     candidates = resting_on_area(candidates, result.settings.footprint_mm2)
+    candidates, strength = strong_enough(rig, candidates, result.settings)
     # the turns with the least predicted support, and the one the search's objective likes best (the first)
     turns = [c for c in candidates if c.kind == "turn"]
     kept_turns = {id(c) for c in sorted(turns, key=lambda c: c.predicted_mm)[:per_kind]} | {id(c) for c in turns[:1]}
@@ -277,7 +297,7 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     for c in kept:  # same_as pointed into the list before the extra turns were dropped
         if c.same_as is not None:
             c.same_as = position.get(id(candidates[c.same_as]))
-    return kept, float(predicted[0])
+    return kept, float(predicted[0]), strength
 
 
 def resting_on_area(candidates: list[Candidate], bound_mm2: float) -> list[Candidate]:
@@ -298,6 +318,49 @@ def resting_on_area(candidates: list[Candidate], bound_mm2: float) -> list[Candi
         if c.same_as is not None:
             c.same_as = position.get(id(candidates[c.same_as]))
     return kept
+
+
+def strong_enough(rig: Rig, candidates: list[Candidate], settings) -> tuple[list[Candidate], dict | None]:
+    """The candidates at least as strong as the rest pose as it stands, or as ``settings.min_safety``.
+
+    Each candidate's ``safety_factor`` and ``breaks_at_n`` are set (:func:`~supportless.search.sturdiness.
+    pose_strength` at ``settings.print_height_mm`` in ``settings.material``). An answer is refused when its
+    safety factor is below both the rest pose's and the floor; when every one is, the strongest is kept.
+    ``same_as`` is renumbered.
+
+    Returns
+    -------
+    kept : list of Candidate
+    strength : dict or None
+        ``rest_safety_factor``, ``floor``, ``material`` and ``refused`` (list of Candidate); None in 2D or with
+        ``min_safety`` 0.
+    """
+    floor = float(getattr(settings, "min_safety", 0.0) or 0.0)
+    if rig.dim != 3 or not floor or not candidates:
+        return candidates, None
+    material = MATERIALS[settings.material]
+    height = float(settings.print_height_mm)
+    rest = pose_strength(rig, rig.rest_angles(), np.eye(3), height, material)
+    seen: list[tuple[Candidate, object]] = []
+    for c in candidates:  # one analysis per print: a copy of another kind prints alike
+        twin = c.same_as is not None and c.same_as < len(candidates) and candidates[c.same_as].safety_factor is not None
+        if twin:
+            c.safety_factor, c.breaks_at_n = candidates[c.same_as].safety_factor, candidates[c.same_as].breaks_at_n
+            continue
+        s = pose_strength(rig, c.result.angles, c.result.rotation, height, material)
+        c.safety_factor = s.safety_factor
+        c.breaks_at_n = s.weakest.breaks_at_n if s.weakest is not None else float("inf")
+    bound = min(rest.safety_factor, floor)
+    kept = [c for c in candidates if c.safety_factor >= bound * (1.0 - 1e-9)]
+    if not kept:
+        kept = [max(candidates, key=lambda c: c.safety_factor)]
+    refused = [c for c in candidates if all(c is not k for k in kept)]
+    position = {id(c): i for i, c in enumerate(kept)}
+    for c in kept:
+        if c.same_as is not None:
+            c.same_as = position.get(id(candidates[c.same_as]))
+    return kept, {"rest_safety_factor": rest.safety_factor, "floor": floor, "material": material.name,
+                  "refused": refused}
 
 
 def choose_by_model(predicted_mm: np.ndarray, values: np.ndarray, rest_mm: float,
@@ -354,7 +417,7 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
         was chosen; the search's history, stats and time are kept.
     """
     t0 = time.perf_counter()
-    candidates, rest_mm = candidate_answers(rig, result, per_kind, height_mm)
+    candidates, rest_mm, strength = candidate_answers(rig, result, per_kind, height_mm)
     crossing: list[int] = []  # answers that cross themselves as written (checked only when they would be chosen)
     rest_pairs = None
     while True:
@@ -371,11 +434,43 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
         crossing.append(index)
     if crossing:
         reason += "; passed over for crossing themselves as written: " + ", ".join(f"#{i + 1}" for i in crossing)
-    choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64))
+    weighed = strength_record(strength, candidates, index, rest_mm, tolerance)
+    if weighed and weighed["changed_choice"]:
+        reason += f"; {weighed['changed_reason']}"
+    choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64),
+                    strength=weighed)
     chosen = with_choice(candidates[index].result, choice)
     seconds = time.perf_counter() - t0
     return dataclasses.replace(chosen, runtime_seconds=result.runtime_seconds + seconds,
                                stats=dict(chosen.stats, choice_seconds=seconds))
+
+
+def strength_record(strength: dict | None, candidates: list[Candidate], index: int, rest_mm: float,
+                    tolerance: float = PREDICTION_TOLERANCE) -> dict | None:
+    """:attr:`Choice.strength` from :func:`strong_enough`'s record: whether the slicer model would have chosen a
+    refused answer over ``candidates[index]``, and why not, in a sentence."""
+    if strength is None:
+        return None
+    refused = strength["refused"]
+    record = {"rest_safety_factor": _rounded(strength["rest_safety_factor"], 2), "floor": strength["floor"],
+              "material": strength["material"],
+              "refused": [{"kind": c.kind, "predicted_mm": round(c.predicted_mm, 1),
+                           "safety_factor": _rounded(c.safety_factor, 2), "breaks_at_n": _rounded(c.breaks_at_n, 2)}
+                          for c in refused],
+              "changed_choice": False, "changed_reason": None}
+    if refused:
+        everyone = candidates + refused
+        pick, _ = choose_by_model(np.array([c.predicted_mm for c in everyone]),
+                                  np.array([c.result.value for c in everyone]), rest_mm, tolerance)
+        if pick >= len(candidates):
+            weak = everyone[pick]
+            record["changed_choice"] = True
+            record["changed_reason"] = (
+                f"strength changed the choice: the answer with the least predicted support "
+                f"({weak.predicted_mm:.0f} mm) would break at {weak.breaks_at_n:.1f} N "
+                f"(safety factor {weak.safety_factor:.2f}, below the rest pose's "
+                f"{strength['rest_safety_factor']:.2f} and the floor {strength['floor']:g})")
+    return record
 
 
 def crosses_as_written(rig: Rig, result: PoseResult, rest_pairs: int) -> bool:

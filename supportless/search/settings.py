@@ -68,6 +68,15 @@ HEAD_LIMIT = 25.0
 #: "Resting on an area".
 FOOTPRINT_MM2 = 3.0
 
+#: Least safety factor of an answer that is weaker than the rest pose as it stands (:attr:`SearchSettings.min_safety`):
+#: the strength of its weakest section over the stress of its own weight and a 2 N grip at one chain end
+#: (:func:`supportless.energies.strength.analyse_strength`). 1: it holds the grip. Chosen on the zoo and the shared
+#: characters: see benchmarks/RESULTS.md, "Strength of a pose".
+MIN_SAFETY = 1.0
+
+#: Filaments the strength analysis knows (:data:`supportless.energies.strength.MATERIALS`).
+MATERIAL_NAMES = ("PLA", "PETG", "ABS")
+
 #: Print-orientation modes (:attr:`SearchSettings.orient`).
 ORIENT_MODES = ("free", "keep")
 
@@ -92,6 +101,7 @@ RANGES = {
     "chain_limit": (0.0, 180.0),
     "head_limit": (0.0, 180.0),
     "footprint_mm2": (0.0, 10_000.0),
+    "min_safety": (0.0, 100.0),
     "print_height_mm": (0.01, 100_000.0),
     "overhang_angle": (0.0, 90.0),
     "overhang_margin": (0.0, 45.0),
@@ -186,7 +196,14 @@ class SearchSettings:
         (:meth:`supportless.search.objective.Objective.footprint_shortfall`); a turn resting on less (a tip, an
         edge) is refused. Default :data:`FOOTPRINT_MM2`; 0: no such rule. The model as it stands is never judged.
     print_height_mm : float
-        The printed height of the rest pose along up, mm (the print frame's), for ``footprint_mm2``.
+        The printed height of the rest pose along up, mm (the print frame's), for ``footprint_mm2`` and strength.
+    min_safety : float
+        The choice among answers (:func:`supportless.search.choice.strong_enough`) never hands back one whose safety
+        factor (:func:`supportless.energies.strength.analyse_strength`) is below both the rest pose's, as it stands,
+        and this. Default :data:`MIN_SAFETY`; 0: strength is not weighed.
+    material : str
+        The filament (one of :data:`MATERIAL_NAMES`) the strength is judged in; the CLI takes the printer
+        profile's.
     w_chain : float
         Weight of the chain ends' squared world turn (radians) in the
         natural-pose prior (:meth:`supportless.search.objective.Objective.prior_cost`);
@@ -270,6 +287,8 @@ class SearchSettings:
     head_limit: float | None = HEAD_LIMIT
     footprint_mm2: float = FOOTPRINT_MM2
     print_height_mm: float = REFERENCE_HEIGHT_MM
+    min_safety: float = MIN_SAFETY
+    material: str = "PLA"
     w_chain: float = W_CHAIN
     anatomy: bool = True
     contact: bool = True
@@ -314,10 +333,12 @@ class SearchSettings:
             raise InputError(None, f"chain_limit must be within 0..180 degrees, not {self.chain_limit}")
         if self.head_limit is not None and not _within(self.head_limit, RANGES["head_limit"]):
             raise InputError(None, f"head_limit must be within 0..180 degrees, not {self.head_limit}")
-        for name, unit in (("footprint_mm2", "mm²"), ("print_height_mm", "mm")):
+        for name, unit in (("footprint_mm2", "mm²"), ("print_height_mm", "mm"), ("min_safety", "")):
             if not _within(getattr(self, name), RANGES[name]):
                 low, high = RANGES[name]
                 raise InputError(None, f"{name} must be within {low:g}..{high:g} {unit}, not {getattr(self, name)}")
+        if self.material not in MATERIAL_NAMES:
+            raise InputError(None, f"material must be one of {', '.join(MATERIAL_NAMES)}, not {self.material!r}")
         for item in self.limits:
             _bone, _, value = item.partition("=")
             try:

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.geometry import place_on_plate, print_pose
-from ..energies.strength import HANDLING_LOAD_N, Material, Strength, analyse_strength
+from ..energies.materials import Material
+from ..energies.strength import HANDLING_LOAD_N, Strength, analyse_strength
 from ..files.printframe import rotation_to_z
 from ..rig.rig import Rig
 

@@ -6,16 +6,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from supportless.energies.strength import (
-    GRAVITY,
-    MATERIALS,
-    Material,
-    analyse_strength,
-    chain_ends,
-    effective_strength,
-    material_of,
-    section_moments,
-)
+from supportless.energies.materials import MATERIALS, Material, effective_strength, material_of
+from supportless.energies.sections import section_moments
+from supportless.energies.strength import GRAVITY, analyse_strength, chain_ends
 from supportless.files.printer import PrinterProfile
 
 PLA = MATERIALS["PLA"]
@@ -193,8 +186,9 @@ def test_fingers_are_gripped_at_the_hand_and_a_long_tail_at_its_tip():
 def test_strength_across_and_along_the_layers():
     assert effective_strength(PLA, 1.0) == pytest.approx(PLA.across_mpa)
     assert effective_strength(PLA, 0.0) == pytest.approx(PLA.along_mpa)
-    tilt = effective_strength(PLA, np.cos(np.radians([10, 45, 80])))
+    tilt = effective_strength(PLA, np.cos(np.radians(np.linspace(0, 90, 19))))
     assert np.all(np.diff(tilt) > 0)  # the flatter, the stronger
+    assert np.all((tilt >= PLA.across_mpa - 1e-9) & (tilt <= PLA.along_mpa + 1e-9))  # never outside the two
 
 
 def test_the_profiles_filament_is_the_material():
