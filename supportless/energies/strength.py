@@ -50,8 +50,8 @@ MAX_PLANES = 240
 HELD_SHARE = 0.05
 #: Where each bone is cut square to itself, as fractions of its length from its first joint.
 BONE_SAMPLES = (0.15, 0.5, 0.85)
-#: A chain's end is its branching joint when the branch is this close (a share of the body's height) to each of
-#: its leaves: a hand of fingers is gripped at the hand.
+#: A chain's end is its branching joint when the branch is this close (a share of the body's largest extent) to
+#: each of its leaves: a hand of fingers is gripped at the hand.
 CHAIN_REACH = 0.12
 
 
@@ -279,7 +279,8 @@ def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray
     labels = _face_bones(V, F, Jt, B) if face_bones is None else np.asarray(face_bones, np.int64)
     z0, z1 = float(V[:, 2].min()), float(V[:, 2].max())
     height = z1 - z0
-    ends = chain_ends(Jt, B, CHAIN_REACH * height) if ends is None else np.asarray(ends, np.int64)
+    size = float(np.ptp(V, axis=0).max())  # the figure's size, however it lies
+    ends = chain_ends(Jt, B, CHAIN_REACH * size) if ends is None else np.asarray(ends, np.int64)
     weight_per_mm3 = mat.density * GRAVITY * 1e-6  # N/mm³
     face_safety = np.full(len(F), np.inf)
     sections = []
@@ -519,6 +520,8 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
             if outline is None:
                 continue
             pts, area, J2, centroid, faces = outline
+            if centroid[2] < held_below:  # in the hand that holds the figure
+                continue
             beyond = own[(cone_centroid[own] - origin) @ n > 0]
             vol = base_volume + volume[beyond].sum()
             mom = base_moment + (volume[beyond, None] * cone_centroid[beyond]).sum(axis=0)

@@ -133,6 +133,8 @@ class Choice:
         How strength weighed (:func:`strong_enough`): ``rest_safety_factor``, ``floor``, ``refused`` (the
         answers left out, each a dict of ``kind``, ``predicted_mm``, ``safety_factor``, ``breaks_at_n``) and
         ``changed_choice`` (the slicer model would have chosen one of them); None when strength was not weighed.
+    refused : list of Candidate
+        The answers left out for strength, with their safety factors.
     """
 
     candidates: list[Candidate]
@@ -146,6 +148,7 @@ class Choice:
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
     model_chosen: int = -1
     strength: dict | None = None
+    refused: list = field(default_factory=list)
 
     def __post_init__(self):
         if self.model_chosen < 0:
@@ -438,7 +441,7 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
     if weighed and weighed["changed_choice"]:
         reason += f"; {weighed['changed_reason']}"
     choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64),
-                    strength=weighed)
+                    strength=weighed, refused=list(strength["refused"]) if strength else [])
     chosen = with_choice(candidates[index].result, choice)
     seconds = time.perf_counter() - t0
     return dataclasses.replace(chosen, runtime_seconds=result.runtime_seconds + seconds,
