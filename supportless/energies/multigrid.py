@@ -1,0 +1,315 @@
+"""Solving a held elastic problem: sparse LU when small, else conjugate gradients with a multigrid cycle.
+
+The multigrid preconditioner is one symmetric V-cycle (one block-Jacobi sweep before and after each coarse
+correction, :func:`vcycle`) over:
+
+1. the P2 problem (when the mesh is quadratic);
+2. the P1 problem on the same tetrahedra (exactly the P2 one's Galerkin coarse problem under the P1 → P2
+   interpolation, :func:`supportless.energies.elasticity.prolongation`);
+3. a smoothed-aggregation coarse problem of the P1 one (:func:`aggregate`, :func:`rigid_prolongation`): the
+   nodes gathered into aggregates of a node and its neighbours, each moving as a rigid body (six unknowns), the
+   prolongation smoothed by one damped Jacobi step; solved by sparse LU.
+
+Written with scipy only. The matrices are scipy BSR matrices of 3 × 3 node blocks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+from .elasticity import restrict_blocks
+
+__all__ = ["CG_TOLERANCE", "COARSE_DOFS", "DIRECT_DOFS", "aggregate", "block_jacobi", "rigid_prolongation",
+           "solve_held", "vcycle"]
+
+#: Systems with at most this many unknowns are solved by sparse LU; larger ones by multigrid CG.
+DIRECT_DOFS = 6_000
+
+#: A multigrid level with at most this many unknowns is solved by sparse LU.
+COARSE_DOFS = 6_000
+
+#: Cycles at every level but the finest (cheaper ones): more make the coarse correction nearer exact.
+INNER_CYCLES = 3
+
+#: Relative residual at which conjugate gradients stop.
+CG_TOLERANCE = 1e-8
+
+
+def solve_held(K: sp.bsr_matrix, f: np.ndarray, held: np.ndarray, positions: np.ndarray,
+               coarse: tuple | None = None) -> tuple[np.ndarray, dict]:
+    """Solve ``K u = f`` with ``u = 0`` at the held nodes.
+
+    Parameters
+    ----------
+    K : (3N, 3N) scipy.sparse.bsr_matrix float64
+        3 × 3 blocks, one per pair of nodes (scalar degrees of freedom).
+    f : (3N,) float64
+    held : (N,) bool
+    positions : (t, 3) float64
+        The mesh vertices: the first ``t`` nodes (the only ones of a P1 mesh).
+    coarse : (K1 (3t, 3t) bsr_matrix, P (N, t) csr_matrix), optional
+        For a P2 problem, the P1 problem on its vertices and the P1 → P2 interpolation of a node's value.
+
+    Returns
+    -------
+    u : (N, 3) float64
+    info : dict
+        ``solver`` ("lu" or "multigrid-cg"), ``unknowns``, ``iterations``, ``levels`` (unknowns per
+        level), ``residual`` (relative).
+    """
+    free = ~held
+    A = restrict_blocks(K, free)
+    b = f.reshape(-1, 3)[free].ravel()
+    if len(b) <= DIRECT_DOFS:
+        x = sla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A").solve(b)
+        info = {"solver": "lu", "iterations": 1, "levels": [len(b)]}
+    else:
+        levels, lu = hierarchy(A, free, positions, coarse)
+        count = [0]
+
+        def tick(_):
+            count[0] += 1
+
+        M = sla.LinearOperator(A.shape, matvec=lambda r: vcycle(levels, lu, np.ravel(r)), dtype=np.float64)
+        x, status = sla.cg(A, b, rtol=CG_TOLERANCE, atol=0.0, maxiter=500, M=M, callback=tick)
+        if status != 0:
+            raise RuntimeError(f"conjugate gradients did not converge in {count[0]} iterations")
+        info = {"solver": "multigrid-cg", "iterations": count[0],
+                "levels": [lv.A.shape[0] for lv in levels] + [lu.shape[0]]}
+    u = np.zeros((len(held), 3))
+    u[free] = x.reshape(-1, 3)
+    norm = np.linalg.norm(b)
+    info.update(unknowns=len(b), residual=float(np.linalg.norm(A @ x - b) / norm) if norm > 0 else 0.0)
+    return u, info
+
+
+@dataclass(frozen=True)
+class Level:
+    """One level of the multigrid cycle.
+
+    Attributes
+    ----------
+    A : (n, n) scipy.sparse.bsr_matrix float64
+        This level's matrix.
+    Dinv : (n, n) scipy.sparse.bsr_matrix float64
+        The inverse of its 3 × 3 diagonal blocks.
+    omega : float
+        Jacobi damping, ``omega * lambda_max(Dinv A) <= 1``.
+    P : (n, m) scipy.sparse.csr_matrix float64
+        The prolongation from the next level; ``R = Pᵀ``.
+    R : (m, n) scipy.sparse.csr_matrix float64
+    """
+
+    A: sp.bsr_matrix
+    Dinv: sp.bsr_matrix
+    omega: float
+    P: sp.csr_matrix
+    R: sp.csr_matrix
+
+
+def hierarchy(A: sp.bsr_matrix, free: np.ndarray, positions: np.ndarray, coarse: tuple | None
+              ) -> tuple[list[Level], object]:
+    """The levels of the cycle, finest first, and the sparse LU of the coarsest problem.
+
+    Parameters
+    ----------
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+        The free nodes' problem.
+    free : (N,) bool
+    positions : (t, 3) float64
+        Vertex positions (the first ``t`` nodes).
+    coarse : (K1, P) or None
+        See :func:`solve_held`.
+
+    Returns
+    -------
+    levels : list of Level
+    lu : scipy.sparse.linalg.SuperLU
+    """
+    levels = []
+    t = len(positions)
+    vfree = free[:t]
+    if coarse is not None:  # P2 -> P1 on the same tetrahedra, exactly Galerkin
+        K1, P = coarse
+        P3 = sp.kron(P[free][:, vfree], sp.identity(3), format="csr")
+        levels.append(_level(A, P3))
+        A = restrict_blocks(K1, vfree)
+    if A.shape[0] > COARSE_DOFS:
+        T = rigid_prolongation(positions[vfree], aggregate(_node_graph(A)))
+        Dinv = block_jacobi(A)
+        omega = 1.0 / largest_eigenvalue(A, Dinv)
+        Asp = A.tocsr()
+        P = (T - (4.0 / 3.0) * omega * (Dinv @ (Asp @ T))).tocsr()  # one Jacobi step: smoothed aggregation
+        levels.append(Level(A, Dinv, omega, P, P.T.tocsr()))
+        A = P.T @ (Asp @ P)
+    A = sp.csc_matrix(0.5 * (A + A.T))
+    return levels, sla.splu(A, permc_spec="MMD_AT_PLUS_A")
+
+
+def _level(A: sp.bsr_matrix, P: sp.csr_matrix) -> Level:
+    """A :class:`Level` of ``A`` with the prolongation ``P`` from the next one."""
+    Dinv = block_jacobi(A)
+    return Level(A, Dinv, 1.0 / largest_eigenvalue(A, Dinv), P, P.T.tocsr())
+
+
+def vcycle(levels: list[Level], lu, r: np.ndarray, k: int = 0) -> np.ndarray:
+    """One symmetric V-cycle from level ``k``: smooth, correct from the next level, smooth again.
+
+    Parameters
+    ----------
+    levels : list of Level
+    lu : scipy.sparse.linalg.SuperLU
+        The coarsest problem, factorised.
+    r : (n,) float64
+        The residual at level ``k``.
+    k : int
+
+    Returns
+    -------
+    x : (n,) float64
+        An approximation of ``A_k⁻¹ r``; the map is linear, symmetric and positive definite.
+    """
+    if k == len(levels):
+        return lu.solve(r)
+    level = levels[k]
+    x = np.zeros_like(r)
+    for _ in range(1 if k == 0 else INNER_CYCLES):
+        x += level.omega * (level.Dinv @ (r - level.A @ x))
+        x += level.P @ vcycle(levels, lu, level.R @ (r - level.A @ x), k + 1)
+        x += level.omega * (level.Dinv @ (r - level.A @ x))
+    return x
+
+
+def block_jacobi(A: sp.bsr_matrix) -> sp.bsr_matrix:
+    """The inverse of the 3 × 3 node blocks on the diagonal of a stiffness matrix.
+
+    Parameters
+    ----------
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+        3 × 3 blocks, every diagonal block stored.
+
+    Returns
+    -------
+    Dinv : (3n, 3n) scipy.sparse.bsr_matrix float64
+    """
+    n = A.shape[0] // 3
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    diagonal = np.empty((n, 3, 3))
+    on = rows == A.indices
+    diagonal[rows[on]] = A.data[on]
+    return sp.bsr_matrix((np.linalg.inv(diagonal), np.arange(n), np.arange(n + 1)), shape=A.shape)
+
+
+def largest_eigenvalue(A: sp.bsr_matrix, Dinv: sp.bsr_matrix, steps: int = 12) -> float:
+    """An upper estimate of the largest eigenvalue of ``D⁻¹ A`` (power iteration, 10 % margin).
+
+    Parameters
+    ----------
+    A, Dinv : (n, n) scipy.sparse.bsr_matrix float64
+    steps : int
+
+    Returns
+    -------
+    value : float
+    """
+    x = np.random.default_rng(0).standard_normal(A.shape[0])
+    value = 1.0
+    for _ in range(steps):
+        y = Dinv @ (A @ x)
+        value = float(np.linalg.norm(y) / np.linalg.norm(x))
+        x = y / np.linalg.norm(y)
+    return 1.1 * value
+
+
+def _node_graph(A: sp.bsr_matrix) -> sp.csr_matrix:
+    """(n, n) scipy.sparse.csr_matrix: which nodes of a block matrix are coupled (its block pattern)."""
+    n = A.shape[0] // 3
+    return sp.csr_matrix((np.ones(A.indices.size, bool), A.indices, A.indptr), shape=(n, n))
+
+
+def aggregate(graph: sp.csr_matrix) -> np.ndarray:
+    """Gather the nodes of a graph into aggregates: stars of a node and its neighbours, then the rest attached.
+
+    Pass 1 makes an aggregate of each node whose neighbours are all still free, with them; pass 2 attaches
+    every node left to the aggregate of a neighbour; pass 3 makes aggregates of what is left (nodes whose
+    neighbours were all left too) the same way.
+
+    Parameters
+    ----------
+    graph : (n, n) scipy.sparse.csr_matrix
+        Symmetric; the diagonal is ignored.
+
+    Returns
+    -------
+    labels : (n,) int64
+        The aggregate of each node, ``0 .. count - 1``.
+    """
+    n = graph.shape[0]
+    indptr, indices = graph.indptr, graph.indices
+    labels = np.full(n, -1, np.int64)
+    count = 0
+    for i in range(n):  # pass 1: stars of free nodes
+        nbrs = indices[indptr[i]:indptr[i + 1]]
+        if labels[i] < 0 and (labels[nbrs] < 0).all():
+            labels[nbrs] = count
+            labels[i] = count
+            count += 1
+    for i in np.flatnonzero(labels < 0):  # pass 2: attach to a neighbour's aggregate
+        nbrs = indices[indptr[i]:indptr[i + 1]]
+        taken = labels[nbrs][labels[nbrs] >= 0]
+        if len(taken):
+            labels[i] = taken[0]
+    for i in np.flatnonzero(labels < 0):  # pass 3: what is left (isolated clusters)
+        if labels[i] < 0:
+            nbrs = indices[indptr[i]:indptr[i + 1]]
+            labels[nbrs[labels[nbrs] < 0]] = count
+            labels[i] = count
+            count += 1
+    return labels
+
+
+def rigid_prolongation(positions: np.ndarray, labels: np.ndarray) -> sp.csr_matrix:
+    """The tentative prolongation of smoothed aggregation: each aggregate moves as a rigid body.
+
+    Each aggregate's rigid motions (three translations, three rotations about its centroid) are
+    orthonormalised over its nodes; an aggregate too small for six independent motions (one node, or nodes on
+    a line) keeps those it has.
+
+    Parameters
+    ----------
+    positions : (n, 3) float64
+        Node positions.
+    labels : (n,) int64
+        Aggregate of each node, ``0 .. g - 1``.
+
+    Returns
+    -------
+    T : (3n, c) scipy.sparse.csr_matrix float64
+        ``c <= 6 g`` columns, orthonormal.
+    """
+    order = np.argsort(labels, kind="stable")
+    starts = np.searchsorted(labels[order], np.arange(labels.max() + 2))
+    rows, cols, vals = [], [], []
+    column = 0
+    for g in range(len(starts) - 1):
+        nodes = order[starts[g]:starts[g + 1]]
+        r = positions[nodes] - positions[nodes].mean(axis=0)
+        r /= max(float(np.sqrt((r ** 2).sum(axis=1).mean())), 1e-300)
+        modes = np.zeros((len(nodes), 3, 6))
+        modes[:, :, :3] = np.eye(3)
+        modes[:, 0, 4], modes[:, 0, 5] = r[:, 2], -r[:, 1]  # the rotations' displacements w × r, by column
+        modes[:, 1, 3], modes[:, 1, 5] = -r[:, 2], r[:, 0]
+        modes[:, 2, 3], modes[:, 2, 4] = r[:, 1], -r[:, 0]
+        U, S, _ = np.linalg.svd(modes.reshape(-1, 6), full_matrices=False)
+        keep = U[:, S > 1e-8 * S[0]]
+        dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+        rows.append(np.repeat(dofs, keep.shape[1]))
+        cols.append(np.tile(np.arange(column, column + keep.shape[1]), len(dofs)))
+        vals.append(keep.ravel())
+        column += keep.shape[1]
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(3 * len(positions), column))
