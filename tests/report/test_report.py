@@ -232,3 +232,23 @@ def test_the_report_says_what_the_rest_pose_and_the_answer_rest_on(branch_rig, s
     assert fp["rest_mm2"] == pytest.approx(footprint_area(branch_rig.vertices, branch_rig.faces, branch_rig.up,
                                                           scale), abs=0.01)
     assert fp["rest_mm2"] > 0 and fp["bound_mm2"] == 0.0 and fp["height_mm"] == 60.0
+
+
+def test_the_report_says_how_strong_the_rest_pose_and_the_answer_are(branch_rig, searched):
+    from supportless.report.report import strength_line
+    from supportless.search.sturdiness import pose_strength
+
+    report = build_report(branch_rig, searched)
+    s = report["strength"]
+    assert set(s) == {"rest", "answer", "floor", "material", "load_n"}
+    assert s["material"]["name"] == "PLA" and s["floor"] == searched.settings.min_safety and s["load_n"] == 2.0
+    height = report["print_frame"]["height_mm"]
+    for part, angles, rotation in (("rest", branch_rig.rest_angles(), np.eye(3)),
+                                   ("answer", searched.angles, searched.rotation)):
+        expected = pose_strength(branch_rig, angles, rotation, height)  # the same analysis, done again
+        assert s[part]["safety_factor"] == pytest.approx(expected.safety_factor, rel=1e-3)
+        w = s[part]["weakest"]
+        assert w["direction"] in ("across", "along") and w["bone"] in branch_rig.bone_names()
+        assert 0.0 <= w["height_mm"] <= height + 1e-6 and w["breaks_at_n"] > 0
+    line = strength_line(s)
+    assert line.startswith("weakest: ") and "the layers" in line and " N" in line

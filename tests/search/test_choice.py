@@ -125,3 +125,40 @@ def test_the_choice_refuses_turns_resting_on_less_than_the_bound():
     assert flat.same_as is None  # it pointed at the refused one
     assert resting_on_area([tip], 3.0) == [tip]  # nothing rests on enough: the one resting on the most is kept
     assert resting_on_area([standing, tip], 0.0) == [standing, tip]  # the rule off
+
+
+def test_the_choice_refuses_answers_weaker_than_both_the_rest_pose_and_the_floor(monkeypatch):
+    """A weak answer is refused only when it is below both; the strongest stays when every one is; the record says
+    when strength changed the slicer model's choice."""
+    from types import SimpleNamespace
+
+    import supportless.search.choice as choice_mod
+    from supportless.search.choice import Candidate, strength_record, strong_enough
+
+    def answer(factor, predicted, value=1.0):
+        result = SimpleNamespace(angles=np.full((1, 3), factor), rotation=np.eye(3), value=value)
+        return Candidate("pose", result, predicted)
+
+    def strength(_rig, angles, _rotation, _height, _material):  # the safety factor rides on the angles
+        factor = float(angles[0, 0])
+        return SimpleNamespace(safety_factor=factor, weakest=SimpleNamespace(breaks_at_n=2.0 * factor))
+
+    monkeypatch.setattr(choice_mod, "pose_strength", strength)
+    rig = SimpleNamespace(dim=3, rest_angles=lambda: np.full((1, 3), 0.5))  # the rest pose's factor: 0.5
+    settings = sl.SearchSettings().replace(min_safety=1.0)
+    weak, under_floor, strong = answer(0.2, 10.0), answer(0.6, 50.0), answer(3.0, 80.0)
+    kept, record = strong_enough(rig, [weak, under_floor, strong], settings)
+    assert kept == [under_floor, strong]  # 0.6 is under the floor but over the rest pose's 0.5: kept
+    assert record["refused"] == [weak] and weak.safety_factor == 0.2 and weak.breaks_at_n == 0.4
+    summary = strength_record(record, kept, 0, rest_mm=100.0)
+    assert summary["changed_choice"] and "0.4 N" in summary["changed_reason"]  # the least support was the weak one
+    # a stronger rest pose: the floor decides
+    rig_strong = SimpleNamespace(dim=3, rest_angles=lambda: np.full((1, 3), 5.0))
+    kept, _ = strong_enough(rig_strong, [answer(0.2, 10.0), answer(1.5, 50.0)], settings)
+    assert [c.safety_factor for c in kept] == [1.5]
+    # every answer weak: the strongest is kept
+    kept, record = strong_enough(rig_strong, [answer(0.2, 10.0), answer(0.3, 50.0)], settings)
+    assert [c.safety_factor for c in kept] == [0.3]
+    # strength not weighed
+    off = [answer(0.2, 10.0)]
+    assert strong_enough(rig, off, settings.replace(min_safety=0.0)) == (off, None) and off[0].safety_factor is None
