@@ -69,22 +69,28 @@ def grip_stress(points: np.ndarray, area: float, J: np.ndarray, lever: np.ndarra
     area : float
     J : (2, 2) float64
         ``∫ q q^T dA`` about the centroid.
-    lever : (3,) float64
-        The force's point relative to the centroid, in ``(e1, e2, n)``.
+    lever : (3,) or (E, 3) float64
+        The force's point relative to the centroid, in ``(e1, e2, n)`` (several forces: one each).
     sign : float
         +1: the free part is on the ``+n`` side; -1: on the ``-n`` side.
 
     Returns
     -------
-    g : (q, 3) float64
+    g : (q, 3) or (E, q, 3) float64
         MPa per N.
     """
-    rx, ry, rz = lever
-    R = np.array([[-rz, 0.0, rx], [0.0, -rz, ry]])  # [-M_2, M_1] = R u
-    k = np.linalg.solve(J + 1e-12 * np.trace(J) * np.eye(2), R) if np.trace(J) > 0 else np.zeros((2, 3))
-    g = points @ k
-    g[:, 2] += 1.0 / area
-    return sign * g
+    r = np.asarray(lever, np.float64)
+    single = r.ndim == 1
+    r = np.atleast_2d(r)
+    zero = np.zeros(len(r))
+    R = np.stack([np.stack([-r[:, 2], zero, r[:, 0]], axis=1), np.stack([zero, -r[:, 2], r[:, 1]], axis=1)],
+                 axis=1)  # (E, 2, 3): [-M_2, M_1] = R u
+    trace = float(np.trace(J))
+    Jinv = np.linalg.inv(J + 1e-12 * trace * np.eye(2)) if trace > 0 else np.zeros((2, 2))
+    g = np.einsum("qi,ij,ejk->eqk", points, Jinv, R)
+    g[..., 2] += 1.0 / area
+    g *= sign
+    return g[0] if single else g
 
 
 @dataclass
@@ -137,11 +143,14 @@ def _verdict(points, area, J, sign, weight_force, weight_lever, grips, strength,
         np.zeros(len(points))
     worst = np.zeros(len(points))
     which = np.full(len(points), -1)
-    for end, share, lever in grips:
-        g = share * np.linalg.norm(grip_stress(points, area, J, lever, sign), axis=1)
-        better = g > worst
-        worst = np.where(better, g, worst)
-        which = np.where(better, end, which)
+    if grips:
+        ends = np.array([e for e, _, _ in grips])
+        shares = np.array([w for _, w, _ in grips])
+        g = shares[:, None] * np.linalg.norm(grip_stress(points, area, J, np.array([x for _, _, x in grips]), sign),
+                                             axis=2)  # (E, q)
+        best = np.argmax(g, axis=0)
+        worst = g[best, np.arange(len(points))]
+        which = np.where(worst > 0, ends[best], -1)
     total = sigma_w + load_n * worst
     i = int(np.argmax(total))
     stress = float(total[i])
@@ -428,6 +437,7 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
         if slab >= 0 and candidates:
             grips[min(candidates, key=lambda c: np.min(np.linalg.norm(cut.part_points[c] - point, axis=1)))].append(e)
     held = cut.part_slab == -1
+    points = group_by(cut.points, cut.point_section, len(cut.layer))
     above_root, loads_above = _sweep(cut, grips, held, downward=True)
     below_root, loads_below = _sweep(cut, grips, held, downward=False)
     z0 = float(V[:, 2].min())
@@ -444,7 +454,7 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
             c3 = np.array([cut.centroid[s, 0], cut.centroid[s, 1], cut.planes[k]])
             weight = np.array([0.0, 0.0, -weight_per_mm3 * volume]) if volume > 0 else None
             lever = moment / volume - c3 if volume > 0 else np.zeros(3)
-            pts = cut.points[cut.point_section == s] - cut.centroid[s]
+            pts = points[s] - cut.centroid[s]
             gl = [(int(ends[e]), share, end_points[e] - c3) for e, share in shares.items()]
             safety, stress, breaks, end = _verdict(pts, cut.area[s], cut.J[s], sign, weight, lever, gl,
                                                    mat.across_mpa, load_n)
