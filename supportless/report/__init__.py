@@ -2,5 +2,6 @@
 
 * :mod:`.report`: measures of a pose (support, distortion, crossings) and the JSON report;
 * :mod:`.render`: before/after pictures, convergence plots;
+* :mod:`.weakness`: the weak sections' colours and the weakest section's line on those pictures;
 * :mod:`.outputs`: the one writer of a result's files (mesh, pose, pictures, report).
 """

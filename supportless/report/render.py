@@ -21,12 +21,7 @@ import numpy as np
 from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 
-__all__ = [
-    "view_bounds",
-    "render_mesh",
-    "render_before_after",
-    "plot_convergence",
-]
+__all__ = ["view_bounds", "render_mesh", "render_before_after", "plot_convergence"]
 
 _BASE_COLOR = np.array([0.80, 0.82, 0.86])
 _RISKY_COLOR = np.array([0.90, 0.12, 0.10])
@@ -513,7 +508,8 @@ def render_before_after(path, before, after, up, before_skeleton=None,
                         after_skeleton=None, before_risky=None,
                         after_risky=None, titles=("before", "after"),
                         suptitle=None, camera=None, size=(1600, 800),
-                        bounds=None, before_balance=None, after_balance=None):
+                        bounds=None, before_balance=None, after_balance=None,
+                        face_colors=(None, None), notes=(None, None)):
     """Write one PNG with the rest pose and the deformed pose side by side.
 
     Both panels share the camera and framing, so sizes are comparable.
@@ -545,6 +541,10 @@ def render_before_after(path, before, after, up, before_skeleton=None,
         ``{"centre_of_mass": (d,) float64, "support": (q, d) float64}``: the
         centre of mass (a ring, with its projection on the plate) and the
         support polygon's corners on the plate (shaded green).
+    face_colors : tuple, optional
+        Each panel's base face colours, (f, 3) float64 or None (grey), as in :func:`render_mesh`.
+    notes : tuple, optional
+        Each panel's line written at its foot (e.g. its weakest section, :mod:`.weakness`), or None.
 
     Returns
     -------
@@ -571,8 +571,11 @@ def render_before_after(path, before, after, up, before_skeleton=None,
         ax = _panel_axes(fig, (0.5 * i, 0.0, 0.5, top), bool(titles))
         joints, bones = (None, None) if sk is None else sk
         title = titles[i] if titles else None
-        _draw_mesh(ax, V, F, up, joints, bones, None, risky, title, camera,
+        _draw_mesh(ax, V, F, up, joints, bones, face_colors[i], risky, title, camera,
                    bounds, aspect, balance)
+        if notes[i]:
+            ax.text(0.5, 0.01, notes[i], transform=ax.transAxes, ha="center", va="bottom", fontsize=12,
+                    color=(0.35, 0.0, 0.4), bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
     return _save_atomic(fig, path)
 
 

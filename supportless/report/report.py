@@ -34,6 +34,7 @@ from ..search.naturalness import naturalness
 from ..search.orientation import print_direction, rotation_axis_angle
 from ..search.sturdiness import pose_strength
 from .render import plot_convergence, render_before_after
+from .weakness import LEGEND, weak_face_colors, weakest_caption
 
 __all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "filament_grams", "pose_measures",
            "predicted_filament_mm", "predicted_slicer", "reduction", "slicer_label", "strength_line",
@@ -501,7 +502,10 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
     the plate, risky faces counted in each frame.
 
     Risky faces are those past the printer's threshold
-    (``result.settings.overhang_angle``), as the report counts them.
+    (``result.settings.overhang_angle``), as the report counts them. In 3D the
+    faces of weak sections are painted over them (:mod:`.weakness`: the rest
+    pose standing, the answer as printed, in both pictures), each panel's
+    weakest section written at its foot.
 
     Parameters
     ----------
@@ -541,15 +545,24 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
         return {"centre_of_mass": standing.centre_of_mass(rig.transforms(angles)) + shift,
                 "support": corners + shift}
 
+    weak = _picture_strength(rig, result, report)  # each pose's weak faces and weakest section, or None
+    legend = f"\n{LEGEND}" if weak else ""
+
+    def coloured(vertices, poses):  # the keywords that colour two panels: risky faces, weak ones over them
+        risky_of = [risky_faces(V, rig.faces, rig.up, angle) if risky else None for V in vertices]
+        if not weak:
+            return {"before_risky": risky_of[0], "after_risky": risky_of[1]}
+        return {"face_colors": tuple(weak_face_colors(weak[k][0], r) for k, r in zip(poses, risky_of)),
+                "notes": tuple(weak[k][1] for k in poses)}
+
     before_after = render_before_after(
         folder / "before_after.png", (rest, rig.faces), (posed, rig.faces), rig.up,
         before_skeleton=(joints_rest, rig.bones), after_skeleton=(joints_posed, rig.bones),
-        before_risky=risky_faces(rest, rig.faces, rig.up, angle) if risky else None,
-        after_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
+        **coloured((rest, posed), (0, 1)),
         titles=("rest pose", "found pose" + _contact_title(report)),
         before_balance=balance(rig.rest_angles(), shift_rest), after_balance=balance(result.angles, shift_posed),
         suptitle=f"{rig.name}: support as printed (prism) {_fmt_pct(change)}; red = needs support (> {angle:.3g} deg); "
-                 "green = support polygon, ring = centre of mass")
+                 f"green = support polygon, ring = centre of mass{legend}")
     written = [("before/after picture", str(before_after))]
     R = np.asarray(result.rotation, np.float64)
     if not np.allclose(R, np.eye(rig.dim)):
@@ -561,16 +574,35 @@ def write_pictures(folder, rig, result, report: dict | None = None) -> list[tupl
         written.append(("print orientation picture", str(render_before_after(
             folder / "print.png", (posed, rig.faces), (printed, rig.faces), rig.up,
             before_skeleton=(joints_posed, rig.bones), after_skeleton=(joints_posed @ R.T + shift, rig.bones),
-            before_risky=risky_faces(posed, rig.faces, rig.up, angle) if risky else None,
-            after_risky=risky_faces(printed, rig.faces, rig.up, angle) if risky else None,
+            **coloured((posed, printed), (1, 1)),
             titles=("found pose, standing", f"as printed: turned {degrees:.0f} deg, model {direction} up"),
             before_balance=balance(result.angles, shift_posed),
             suptitle=f"{rig.name}: print orientation; support (prism) against the rest pose standing: "
-                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:.3g} deg)"))))
+                     f"{_fmt_pct(printed_change)}; red = needs support (> {angle:.3g} deg){legend}"))))
     terms = {k: v for k, v in result.term_history.items() if len(v)}
     convergence = plot_convergence(folder / "convergence.png", result.history, terms=terms or None,
                                    title=f"{rig.name}: best objective per iteration")
     return written + [("convergence plot", str(convergence))]
+
+
+def _picture_strength(rig, result, report: dict | None) -> list[tuple[np.ndarray, str | None]] | None:
+    """The strength the pictures colour: ``[(face_safety (f,) float64, caption)]`` of the rest pose standing and of
+    the answer as printed (:func:`~supportless.search.sturdiness.pose_strength` of ``rig``, the surface drawn), the
+    captions from the report's ``strength`` when it has one (:func:`~supportless.report.weakness.weakest_caption`);
+    None in 2D."""
+    if rig.dim != 3:
+        return None
+    summary = (report or {}).get("strength")
+    height = ((report or {}).get("print_frame") or {}).get("height_mm") or rig_print_frame(rig).height_mm
+    material = MATERIALS[result.settings.material]
+    out = []
+    for key, angles, R in (("rest", rig.rest_angles(), np.eye(3)), ("answer", result.angles, result.rotation)):
+        R = np.asarray(R, np.float64)
+        strength = pose_strength(rig, angles, R, float(height), material)
+        entry = summary[key] if summary else weakest_section(strength, rig.bone_names())
+        out.append((strength.face_safety, weakest_caption(entry, "weakest" if np.allclose(R, np.eye(3)) else
+                                                          "weakest as printed")))
+    return out
 
 
 #: A surface with more triangles than this is drawn as its simplified proxy (:meth:`~supportless.rig.rig.Rig.coarse_rig`):

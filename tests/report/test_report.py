@@ -7,8 +7,10 @@ import pytest
 
 import supportless as sl
 from supportless.copyleft.cgal import intersecting_face_pairs
+from supportless.report import render
 from supportless.report import report as report_mod
 from supportless.report.report import build_report, pose_measures, reduction, write_pictures
+from supportless.report.weakness import WEAK_COLORS
 from supportless.search.settings import SearchSettings
 
 
@@ -94,14 +96,23 @@ def test_pictures_colour_faces_past_the_printers_threshold(branch_rig, searched,
     written = write_pictures(tmp_path, branch_rig, searched, build_report(branch_rig, searched))
     assert [label for label, _ in written] == ["before/after picture", "print orientation picture",
                                                 "convergence plot"]
+    def red(colors):  # the faces drawn as needing support (those of weak sections are drawn over them)
+        colors = np.asarray(colors)
+        weak = np.any([np.all(np.isclose(colors, c), axis=1) for c in WEAK_COLORS.values()], axis=0)
+        return np.all(np.isclose(colors, render._RISKY_COLOR), axis=1), weak
+
     # the print picture: the pose standing beside it turned onto the plate, risky faces of each frame
-    np.testing.assert_array_equal(seen["after_risky"], sl.risky_faces(searched.print_vertices, branch_rig.faces,
-                                                                      branch_rig.up, 40.0))
+    drawn, weak = red(seen["face_colors"][1])
+    np.testing.assert_array_equal(drawn, sl.risky_faces(searched.print_vertices, branch_rig.faces,
+                                                        branch_rig.up, 40.0) & ~weak)
     assert "as printed" in seen["titles"][1]
     rest = sl.base.geometry.place_on_plate(branch_rig.vertices, branch_rig.up)
     expected = sl.risky_faces(rest, branch_rig.faces, branch_rig.up, 40.0)
-    np.testing.assert_array_equal(first["before_risky"], expected)
+    drawn, weak = red(first["face_colors"][0])
+    np.testing.assert_array_equal(drawn, expected & ~weak)
     assert "> 40 deg" in first["suptitle"]
+    # each panel's weakest section, from the report's strength: the rest pose, the answer as printed
+    assert first["notes"][0].startswith("weakest: ") and seen["notes"][1].startswith("weakest as printed: ")
 
 
 def test_pose_measures_in_the_print_frame(branch_rig):
