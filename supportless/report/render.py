@@ -575,7 +575,7 @@ def render_before_after(path, before, after, up, before_skeleton=None,
                    bounds, aspect, balance)
         if notes[i]:
             ax.text(0.5, 0.01, notes[i], transform=ax.transAxes, ha="center", va="bottom", fontsize=12,
-                    color=(0.35, 0.0, 0.4), bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
+                    color=(0.0, 0.3, 0.4), bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none"})
     return _save_atomic(fig, path)
 
 

@@ -3,14 +3,15 @@
 :func:`~supportless.energies.strength.analyse_strength` gives each face the least safety factor of the sections
 cutting it (``face_safety``). A face is drawn
 
-* **magenta** where that factor is below :data:`BREAKS_BELOW` (1): the grip (2 N at a hand, the head, a tail)
+* **cyan** where that factor is below :data:`BREAKS_BELOW` (1): the grip (2 N at a hand, the head, a tail)
   breaks the print there;
-* **violet** where it is below :data:`MARGINAL_BELOW` (2): it holds the grip, but less than twice over (a firmer
-  grip, a knock or a weak print breaks it).
+* **pale cyan** where it is below :data:`MARGINAL_BELOW` (2): it holds the grip, but less than twice over (a
+  firmer grip, a knock or a weak print breaks it).
 
-Red and the warm colours already say "needs support" on the pictures and in the browser app, so the weakness
-colours are cold ones, painted over them: where the print snaps matters more than where it needs support. The
-browser app's strength overlay (:mod:`supportless.apps.ui.strength`) uses the same thresholds and colours.
+Red and the warm colours already say "needs support" (on the pictures and in the browser app), magenta "crosses
+itself" (in the app) and green the support polygon, so the weakness colours are cyan ones, painted over the
+support red: where the print snaps matters more than where it needs support. The browser app's strength overlay
+(:mod:`supportless.apps.ui.strength`) uses the same thresholds and colours.
 """
 
 from __future__ import annotations
@@ -26,11 +27,11 @@ __all__ = ["BREAKS_BELOW", "LEGEND", "MARGINAL_BELOW", "WEAK_COLORS", "weak_face
 BREAKS_BELOW = 1.0
 #: A section whose safety factor is below this (and not below :data:`BREAKS_BELOW`) is marginal.
 MARGINAL_BELOW = 2.0
-#: RGB in [0, 1] of each weakness level: 1 marginal (violet), 2 breaks (magenta).
-WEAK_COLORS = {1: (0.60, 0.42, 0.95), 2: (0.85, 0.08, 0.80)}
+#: RGB in [0, 1] of each weakness level: 1 marginal (pale cyan), 2 breaks (cyan).
+WEAK_COLORS = {1: (0.55, 0.88, 0.95), 2: (0.0, 0.78, 1.0)}
 #: The pictures' legend of the weakness colours.
-LEGEND = (f"magenta = breaks under a grip (safety < {BREAKS_BELOW:g}), "
-          f"violet = marginal (safety < {MARGINAL_BELOW:g})")
+LEGEND = (f"cyan = breaks under a grip (safety < {BREAKS_BELOW:g}), "
+          f"pale cyan = marginal (safety < {MARGINAL_BELOW:g})")
 
 
 def weakness_levels(face_safety: np.ndarray) -> np.ndarray:

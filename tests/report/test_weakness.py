@@ -55,7 +55,7 @@ def test_levels_and_colours_follow_the_thresholds():
     np.testing.assert_allclose(colors[[1, 2]], [WEAK_COLORS[1]] * 2)
     np.testing.assert_allclose(colors[3], render._RISKY_COLOR)  # sound and risky: red as before
     np.testing.assert_allclose(colors[[4, 5]], [render._BASE_COLOR] * 2)
-    assert "magenta" in LEGEND and "violet" in LEGEND
+    assert "cyan" in LEGEND and "pale cyan" in LEGEND
 
 
 def test_the_caption_names_the_weakest_section():
