@@ -8,15 +8,13 @@
 * :class:`~supportless.apps.ui.panel.Panel`: the side panel;
 * :mod:`supportless.apps.ui.ports`: which port the server takes.
 
-How it stays responsive: the view is a skinned mesh, so an edit streams only
-the bone frames; edits only change the state and wake one render thread, which
-always draws the latest pose (a burst of slider events becomes one redraw),
-then measures it with the full weights and redraws the overlays. The search
-runs in its own thread and streams its best pose and print rotation into the view.
+How it stays responsive: the view is a skinned mesh, so an edit streams only the bone frames; edits only change
+the state and wake one render thread, which always draws the latest pose (a burst of slider events becomes one
+redraw), then measures it with the full weights and redraws the overlays. The search runs in its own thread and
+streams its best pose and print rotation into the view; the strength overlay is analysed in its own too.
 
-The view shows the model standing (where the bones are edited) or as printed:
-turned by the state's print rotation onto the plate
-(:meth:`EditorState.frame_transform`), skeleton and risky faces in that frame.
+The view shows the model standing (where the bones are edited) or as printed: turned by the state's print rotation
+onto the plate (:meth:`EditorState.frame_transform`), skeleton and risky faces in that frame.
 """
 
 from __future__ import annotations
@@ -43,6 +41,7 @@ from .readout import broken_rules
 from .scene import Scene, draw_welcome
 from .slicerun import SliceRun, slice_markdown
 from .state import FRAMES, EditorState
+from .strength import StrengthOverlay
 
 #: Ray cells along the footprint's longer side of the support preview (coarser than the measure's, to draw fast).
 PREVIEW_RESOLUTION = 64
@@ -85,18 +84,18 @@ class App:
     measures : dict
         :meth:`EditorState.measure` of the last drawn pose, and the ``support_lead`` (:func:`.filament.support_lead`).
     shown_vertices : (n, d) float64 or None
-        The exactly posed surface last drawn, in the frame of the view
-        (standing, or as printed: ``print_pose(rig.pose(angles), R, up)``).
+        The exactly posed surface last drawn: standing, or as printed (``print_pose(rig.pose(angles), R, up)``).
     view : dict
-        ``frame`` (``"standing"`` or ``"print"``), ``show_risky``, ``weights``, ``show_support`` (the
-        predicted support columns) and ``before`` (the rest pose shown instead of the pose).
+        ``frame`` (``"standing"`` or ``"print"``), ``show_risky``, ``weights``, ``show_support`` (the predicted
+        support columns), ``before`` (the rest pose shown instead of the pose) and ``show_strength`` (the weak
+        sections: ``self.strength``, a :class:`~supportless.apps.ui.strength.StrengthOverlay`, draws them).
     slice_report : dict or None
         The last Slice's figures (:func:`~supportless.apps.ui.slicerun.slice_markdown` shows them).
     uploads : Uploads
         Files sent from the page (a private folder, removed by :meth:`stop`).
     latency_ms : dict
-        ``mesh`` (input to bone frames sent), ``full`` (to energies and
-        overlays drawn) and ``median_mesh`` of the last 50 edits, ms.
+        ``mesh`` (input to bone frames sent), ``full`` (to energies and overlays drawn) and ``median_mesh`` of the
+        last 50 edits, ms.
     status : str
         The last status or error message shown in the page.
     """
@@ -121,7 +120,7 @@ class App:
         self._opening: threading.Thread | None = None
         self._opened = 0  # models opened in this page
         self.uploads = Uploads()
-        self.slicing = SliceRun(self._slice_done)
+        self.slicing, self.strength = SliceRun(self._slice_done), StrengthOverlay(self._request_render)
         self.slice_report: dict | None = None
 
         #: checks the token, Host and Origin of every request (:mod:`supportless.apps.ui.guard`)
@@ -166,7 +165,7 @@ class App:
             state = EditorState(rig, self.base_settings, self.workdir, frame)
             self.rig, self.state, self.slice_report = rig, state, None
             self.view = {"frame": "standing", "show_risky": True, "weights": False, "show_support": True,
-                         "before": False}
+                         "before": False, "show_strength": False}
             self.scene = Scene(self.server, rig, self._on_joint_click, self._on_gizmo,
                                scale=state.print_frame.scale, mesh_key=self._opened)
             self.front = FrontBrowser(state)
@@ -330,7 +329,7 @@ class App:
 
     def set_view(self, show_risky: bool | None = None, weights: bool | None = None,
                  opacity: float | None = None, frame: str | None = None, show_support: bool | None = None,
-                 before: bool | None = None) -> None:
+                 before: bool | None = None, show_strength: bool | None = None) -> None:
         """View options: risky-face overlay, colouring by bone weights, mesh opacity, frame, support preview.
 
         Parameters
@@ -341,6 +340,8 @@ class App:
             Draw the predicted support columns (:func:`supportless.energies.support.support_columns`).
         before : bool, optional
             Show the rest pose, standing, instead of the current pose (the pose is kept).
+        show_strength : bool, optional
+            Colour the weak sections of the pose as printed and name the weakest (:mod:`.strength`).
 
         Raises
         ------
@@ -352,7 +353,7 @@ class App:
                 raise ValueError(f"frame must be one of {FRAMES}, not {frame!r}")
             self.panel.show_view(frame)
         for key, value in (("show_risky", show_risky), ("weights", weights), ("frame", frame),
-                           ("show_support", show_support), ("before", before)):
+                           ("show_support", show_support), ("before", before), ("show_strength", show_strength)):
             if value is not None:
                 self.view[key] = value
         if opacity is not None:
@@ -616,6 +617,7 @@ class App:
         self.latency_ms = {"mesh": mesh_ms, "full": full_ms, "median_mesh": float(np.median(self._latencies))}
         rules = broken_rules(state.objective, angles) if m["terms"]["violation"] > 0 else []
         text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules, lead)
+        text += self.strength.show(self.scene, state, angles, R, shown, view["show_strength"] and not weights)
         self.panel.show_measures(("**Showing the rest pose (before)**\n\n" if view["before"] else "") + text)
         self.panel.show_bone(selected, fixed, locked)
 

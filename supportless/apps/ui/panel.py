@@ -262,6 +262,10 @@ class Panel:
             show_support = g.add_checkbox("Show predicted support", True,
                                           hint="Translucent orange columns: the support the estimate predicts under "
                                                "the pose as shown")
+            show_strength = g.add_checkbox("Show weak sections", False,
+                                           hint="Cyan: where a 2 N grip at a hand, the head or a tail breaks the pose "
+                                                "as printed (pale cyan: less than twice over); the weakest is named "
+                                                "under the measures")
             self.view = g.add_dropdown("View", tuple(VIEWS), initial_value="standing",
                                        hint="standing: as the model stands (the bones are edited here); "
                                             "as printed: turned by the print rotation onto the plate")
@@ -288,6 +292,7 @@ class Panel:
 
         before.on_update(lambda _e: app.set_view(before=bool(before.value)))
         show_support.on_update(lambda _e: app.set_view(show_support=bool(show_support.value)))
+        show_strength.on_update(lambda _e: app.set_view(show_strength=bool(show_strength.value)))
         show_risky.on_update(lambda _e: app.set_view(show_risky=bool(show_risky.value)))
         weights.on_update(lambda _e: app.set_view(weights=bool(weights.value)))
         opacity.on_update(lambda _e: app.set_view(opacity=float(opacity.value)))

@@ -422,6 +422,31 @@ class Scene:
                 self._overlay(f"risky{k}", lifted(risky & (level == k), 1.0), RISKY_COLORS[k])
             self._overlay("intersections", lifted(inter, 1.5), INTERSECT_COLOR, side="double")
 
+    def draw_faces(self, key: str, vertices: np.ndarray, mask: np.ndarray | None, color, lift: float = 2.0) -> None:
+        """Some faces of the posed surface in one colour, lifted off it to show on top (3D).
+
+        Parameters
+        ----------
+        key : str
+            The overlay's name: one node per key, reused from one pose to the next.
+        vertices : (n, 3) float64
+            The exactly posed surface, placed as :meth:`draw_pose` placed the pose (model units).
+        mask : (f,) bool or None
+            The faces drawn; None (or none set) hides the overlay.
+        color : tuple of int
+            RGB, 0-255.
+        lift : float
+            How far off the surface, in 0.2 % of the model's size (risky faces 1, intersecting faces 1.5).
+        """
+        if mask is None or not np.any(mask):
+            self._overlay(key, np.zeros((0, 3)), color)
+            return
+        V3 = self.scale * to3(vertices)
+        a, b, c = (V3[self.faces[mask, k]] for k in range(3))
+        n = np.cross(b - a, c - a)
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+        self._overlay(key, (np.stack([a, b, c], 1) + lift * 0.002 * self.size * n[:, None, :]).reshape(-1, 3), color)
+
     def draw_support(self, columns) -> None:
         """The predicted support as a translucent body: one box per column of the ray grid.
 
