@@ -1,7 +1,7 @@
 """Solving a held elastic problem: sparse LU when small, else conjugate gradients with a multigrid cycle.
 
-The multigrid preconditioner is one symmetric V-cycle (one block-Jacobi sweep before and after each coarse
-correction, :func:`vcycle`) over:
+The multigrid preconditioner is one symmetric V-cycle (:func:`vcycle`: a forward Gauss-Seidel sweep over the
+3 × 3 node blocks before each coarse correction, a backward one after) over:
 
 1. the P2 problem (when the mesh is quadratic);
 2. the P1 problem on the same tetrahedra (exactly the P2 one's Galerkin coarse problem under the P1 → P2
@@ -10,7 +10,9 @@ correction, :func:`vcycle`) over:
    nodes gathered into aggregates of a node and its neighbours, each moving as a rigid body (six unknowns), the
    prolongation smoothed by one damped Jacobi step; solved by sparse LU.
 
-Written with scipy only. The matrices are scipy BSR matrices of 3 × 3 node blocks.
+The levels below the finest are cycled :data:`INNER_CYCLES` times (they are several times cheaper). The matrix
+products and sweeps over the 3 × 3 blocks are compiled (numba; the products parallel over rows); a rig's
+TetGen mesh has slivers, which Gauss-Seidel smooths better than Jacobi (the bunny: 83 iterations against 122).
 """
 
 from __future__ import annotations
@@ -20,11 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
+from numba import njit, prange
 
 from .elasticity import restrict_blocks
 
-__all__ = ["CG_TOLERANCE", "COARSE_DOFS", "DIRECT_DOFS", "aggregate", "block_jacobi", "rigid_prolongation",
-           "solve_held", "vcycle"]
+__all__ = ["CG_TOLERANCE", "COARSE_DOFS", "DIRECT_DOFS", "INNER_CYCLES", "Level", "aggregate", "block_jacobi",
+           "block_matvec", "gauss_seidel", "hierarchy", "largest_eigenvalue", "rigid_prolongation", "solve_held",
+           "vcycle"]
 
 #: Systems with at most this many unknowns are solved by sparse LU; larger ones by multigrid CG.
 DIRECT_DOFS = 6_000
@@ -74,8 +78,9 @@ def solve_held(K: sp.bsr_matrix, f: np.ndarray, held: np.ndarray, positions: np.
         def tick(_):
             count[0] += 1
 
+        op = sla.LinearOperator(A.shape, matvec=lambda v: block_matvec(A, np.ravel(v)), dtype=np.float64)
         M = sla.LinearOperator(A.shape, matvec=lambda r: vcycle(levels, lu, np.ravel(r)), dtype=np.float64)
-        x, status = sla.cg(A, b, rtol=CG_TOLERANCE, atol=0.0, maxiter=500, M=M, callback=tick)
+        x, status = sla.cg(op, b, rtol=CG_TOLERANCE, atol=0.0, maxiter=1000, M=M, callback=tick)
         if status != 0:
             raise RuntimeError(f"conjugate gradients did not converge in {count[0]} iterations")
         info = {"solver": "multigrid-cg", "iterations": count[0],
@@ -93,20 +98,17 @@ class Level:
 
     Attributes
     ----------
-    A : (n, n) scipy.sparse.bsr_matrix float64
-        This level's matrix.
-    Dinv : (n, n) scipy.sparse.bsr_matrix float64
-        The inverse of its 3 × 3 diagonal blocks.
-    omega : float
-        Jacobi damping, ``omega * lambda_max(Dinv A) <= 1``.
-    P : (n, m) scipy.sparse.csr_matrix float64
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+        This level's matrix, 3 × 3 blocks with sorted indices.
+    Dinv : (n, 3, 3) float64
+        The inverses of its diagonal blocks.
+    P : (3n, m) scipy.sparse.csr_matrix float64
         The prolongation from the next level; ``R = Pᵀ``.
-    R : (m, n) scipy.sparse.csr_matrix float64
+    R : (m, 3n) scipy.sparse.csr_matrix float64
     """
 
     A: sp.bsr_matrix
-    Dinv: sp.bsr_matrix
-    omega: float
+    Dinv: np.ndarray
     P: sp.csr_matrix
     R: sp.csr_matrix
 
@@ -136,28 +138,23 @@ def hierarchy(A: sp.bsr_matrix, free: np.ndarray, positions: np.ndarray, coarse:
     if coarse is not None:  # P2 -> P1 on the same tetrahedra, exactly Galerkin
         K1, P = coarse
         P3 = sp.kron(P[free][:, vfree], sp.identity(3), format="csr")
-        levels.append(_level(A, P3))
+        levels.append(Level(A, block_jacobi(A), P3, P3.T.tocsr()))
         A = restrict_blocks(K1, vfree)
     if A.shape[0] > COARSE_DOFS:
         T = rigid_prolongation(positions[vfree], aggregate(_node_graph(A)))
         Dinv = block_jacobi(A)
-        omega = 1.0 / largest_eigenvalue(A, Dinv)
+        omega = 4.0 / (3.0 * largest_eigenvalue(A, Dinv))
         Asp = A.tocsr()
-        P = (T - (4.0 / 3.0) * omega * (Dinv @ (Asp @ T))).tocsr()  # one Jacobi step: smoothed aggregation
-        levels.append(Level(A, Dinv, omega, P, P.T.tocsr()))
+        Dinv_sp = sp.bsr_matrix((Dinv, np.arange(len(Dinv)), np.arange(len(Dinv) + 1)), shape=A.shape)
+        P = (T - omega * (Dinv_sp @ (Asp @ T))).tocsr()  # one Jacobi step: smoothed aggregation
+        levels.append(Level(A, Dinv, P, P.T.tocsr()))
         A = P.T @ (Asp @ P)
     A = sp.csc_matrix(0.5 * (A + A.T))
     return levels, sla.splu(A, permc_spec="MMD_AT_PLUS_A")
 
 
-def _level(A: sp.bsr_matrix, P: sp.csr_matrix) -> Level:
-    """A :class:`Level` of ``A`` with the prolongation ``P`` from the next one."""
-    Dinv = block_jacobi(A)
-    return Level(A, Dinv, 1.0 / largest_eigenvalue(A, Dinv), P, P.T.tocsr())
-
-
 def vcycle(levels: list[Level], lu, r: np.ndarray, k: int = 0) -> np.ndarray:
-    """One symmetric V-cycle from level ``k``: smooth, correct from the next level, smooth again.
+    """One symmetric cycle from level ``k``: forward Gauss-Seidel, the next level's correction, backward Gauss-Seidel.
 
     Parameters
     ----------
@@ -171,21 +168,96 @@ def vcycle(levels: list[Level], lu, r: np.ndarray, k: int = 0) -> np.ndarray:
     Returns
     -------
     x : (n,) float64
-        An approximation of ``A_k⁻¹ r``; the map is linear, symmetric and positive definite.
+        An approximation of ``A_k⁻¹ r``; the map is linear, symmetric and positive definite. Below the finest
+        level the cycle is repeated :data:`INNER_CYCLES` times.
     """
     if k == len(levels):
         return lu.solve(r)
     level = levels[k]
-    x = np.zeros_like(r)
+    r = np.ascontiguousarray(r, np.float64)
+    x = np.zeros(r.shape)
     for _ in range(1 if k == 0 else INNER_CYCLES):
-        x += level.omega * (level.Dinv @ (r - level.A @ x))
-        x += level.P @ vcycle(levels, lu, level.R @ (r - level.A @ x), k + 1)
-        x += level.omega * (level.Dinv @ (r - level.A @ x))
+        gauss_seidel(level.A, level.Dinv, r, x, True)
+        x += level.P @ vcycle(levels, lu, level.R @ (r - block_matvec(level.A, x)), k + 1)
+        gauss_seidel(level.A, level.Dinv, r, x, False)
     return x
 
 
-def block_jacobi(A: sp.bsr_matrix) -> sp.bsr_matrix:
-    """The inverse of the 3 × 3 node blocks on the diagonal of a stiffness matrix.
+@njit(cache=True, parallel=True)
+def _block_matvec(indptr, indices, data, x, y):  # pragma: no cover - compiled
+    for i in prange(len(indptr) - 1):
+        y0 = 0.0
+        y1 = 0.0
+        y2 = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            j = 3 * indices[k]
+            a = data[k]
+            y0 += a[0, 0] * x[j] + a[0, 1] * x[j + 1] + a[0, 2] * x[j + 2]
+            y1 += a[1, 0] * x[j] + a[1, 1] * x[j + 1] + a[1, 2] * x[j + 2]
+            y2 += a[2, 0] * x[j] + a[2, 1] * x[j + 1] + a[2, 2] * x[j + 2]
+        y[3 * i] = y0
+        y[3 * i + 1] = y1
+        y[3 * i + 2] = y2
+
+
+def block_matvec(A: sp.bsr_matrix, x: np.ndarray) -> np.ndarray:
+    """``A @ x`` for a matrix of 3 × 3 blocks (compiled, parallel over block rows).
+
+    Parameters
+    ----------
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+    x : (3n,) float64
+
+    Returns
+    -------
+    y : (3n,) float64
+    """
+    y = np.empty(A.shape[0])
+    _block_matvec(A.indptr, A.indices, A.data, np.ascontiguousarray(x, np.float64), y)
+    return y
+
+
+@njit(cache=True)
+def _gauss_seidel(indptr, indices, data, dinv, b, x, forward):  # pragma: no cover - compiled
+    n = len(indptr) - 1
+    for step in range(n):
+        i = step if forward else n - 1 - step
+        r0 = b[3 * i]
+        r1 = b[3 * i + 1]
+        r2 = b[3 * i + 2]
+        for k in range(indptr[i], indptr[i + 1]):
+            j = indices[k]
+            if j != i:
+                a = data[k]
+                j3 = 3 * j
+                r0 -= a[0, 0] * x[j3] + a[0, 1] * x[j3 + 1] + a[0, 2] * x[j3 + 2]
+                r1 -= a[1, 0] * x[j3] + a[1, 1] * x[j3 + 1] + a[1, 2] * x[j3 + 2]
+                r2 -= a[2, 0] * x[j3] + a[2, 1] * x[j3 + 1] + a[2, 2] * x[j3 + 2]
+        d = dinv[i]
+        x[3 * i] = d[0, 0] * r0 + d[0, 1] * r1 + d[0, 2] * r2
+        x[3 * i + 1] = d[1, 0] * r0 + d[1, 1] * r1 + d[1, 2] * r2
+        x[3 * i + 2] = d[2, 0] * r0 + d[2, 1] * r1 + d[2, 2] * r2
+
+
+def gauss_seidel(A: sp.bsr_matrix, Dinv: np.ndarray, b: np.ndarray, x: np.ndarray, forward: bool) -> None:
+    """One block Gauss-Seidel sweep for ``A x = b``, in place: each node's 3 × 3 block solved in turn.
+
+    Parameters
+    ----------
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+    Dinv : (n, 3, 3) float64
+        Inverses of the diagonal blocks.
+    b : (3n,) float64
+    x : (3n,) float64
+        Updated in place.
+    forward : bool
+        Nodes in increasing order, else decreasing (the two together are symmetric).
+    """
+    _gauss_seidel(A.indptr, A.indices, A.data, Dinv, b, x, forward)
+
+
+def block_jacobi(A: sp.bsr_matrix) -> np.ndarray:
+    """The inverses of the 3 × 3 node blocks on the diagonal of a stiffness matrix.
 
     Parameters
     ----------
@@ -194,22 +266,23 @@ def block_jacobi(A: sp.bsr_matrix) -> sp.bsr_matrix:
 
     Returns
     -------
-    Dinv : (3n, 3n) scipy.sparse.bsr_matrix float64
+    Dinv : (n, 3, 3) float64
     """
     n = A.shape[0] // 3
     rows = np.repeat(np.arange(n), np.diff(A.indptr))
     diagonal = np.empty((n, 3, 3))
     on = rows == A.indices
     diagonal[rows[on]] = A.data[on]
-    return sp.bsr_matrix((np.linalg.inv(diagonal), np.arange(n), np.arange(n + 1)), shape=A.shape)
+    return np.linalg.inv(diagonal)
 
 
-def largest_eigenvalue(A: sp.bsr_matrix, Dinv: sp.bsr_matrix, steps: int = 12) -> float:
+def largest_eigenvalue(A: sp.bsr_matrix, Dinv: np.ndarray, steps: int = 12) -> float:
     """An upper estimate of the largest eigenvalue of ``D⁻¹ A`` (power iteration, 10 % margin).
 
     Parameters
     ----------
-    A, Dinv : (n, n) scipy.sparse.bsr_matrix float64
+    A : (3n, 3n) scipy.sparse.bsr_matrix float64
+    Dinv : (n, 3, 3) float64
     steps : int
 
     Returns
@@ -219,7 +292,7 @@ def largest_eigenvalue(A: sp.bsr_matrix, Dinv: sp.bsr_matrix, steps: int = 12) -
     x = np.random.default_rng(0).standard_normal(A.shape[0])
     value = 1.0
     for _ in range(steps):
-        y = Dinv @ (A @ x)
+        y = np.einsum("nij,nj->ni", Dinv, block_matvec(A, x).reshape(-1, 3)).ravel()
         value = float(np.linalg.norm(y) / np.linalg.norm(x))
         x = y / np.linalg.norm(y)
     return 1.1 * value
