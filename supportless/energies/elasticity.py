@@ -270,8 +270,8 @@ def locate(nodes: np.ndarray, tets: np.ndarray, points: np.ndarray, neighbours: 
            ) -> tuple[np.ndarray, np.ndarray]:
     """The tetrahedron containing each point; points outside the mesh go to its nearest boundary point.
 
-    The ``neighbours`` tetrahedra with the nearest centroids are tried first, then all of them. A point in
-    none (outside the mesh) is moved to the nearest point of the mesh's boundary surface (libigl's
+    The ``neighbours`` tetrahedra with the nearest centroids are tried first, then every tetrahedron whose
+    bounding box holds the point. A point in none (outside the mesh) is moved to the nearest point of the mesh's boundary surface (libigl's
     point-to-mesh distance) and takes the tetrahedron of that boundary triangle: the nearest tetrahedron.
 
     Parameters
@@ -294,8 +294,13 @@ def locate(nodes: np.ndarray, tets: np.ndarray, points: np.ndarray, neighbours: 
     c = min(neighbours, len(tets))
     near = cKDTree(centroids).query(points, c)[1].reshape(len(points), c)
     cells = _containing(nodes, tets, points, near)
-    for i in np.flatnonzero(cells < 0):  # a long sliver's centroid may be far: every tetrahedron
-        cells[i] = _containing(nodes, tets, points[i:i + 1], np.arange(len(tets))[None])[0]
+    if (cells < 0).any():  # a long sliver's centroid may be far: every tetrahedron whose box holds the point
+        corners = nodes[tets]
+        lo, hi = corners.min(axis=1) - 1e-9, corners.max(axis=1) + 1e-9
+        for i in np.flatnonzero(cells < 0):
+            boxed = np.flatnonzero(((lo <= points[i]) & (points[i] <= hi)).all(axis=1))
+            if len(boxed):
+                cells[i] = _containing(nodes, tets, points[i:i + 1], boxed[None])[0]
     where = points.copy()
     outside = np.flatnonzero(cells < 0)
     if len(outside):

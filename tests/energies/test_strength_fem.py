@@ -153,3 +153,15 @@ def test_plate_nodes_are_the_first_layer():
     nodes = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 1.15], [0.0, 1.0, 1.3], [0.0, 0.0, 5.0]])
     assert plate_nodes(nodes).tolist() == [True, True, False, False]
     assert plate_nodes(nodes, tolerance_mm=0.5).tolist() == [True, True, True, False]
+
+
+@pytest.mark.parametrize("neighbours", [16, 1])  # 1: most points found by the bounding boxes' fallback
+def test_points_are_located_in_the_tetrahedron_skfem_finds(column, neighbours):
+    nodes, tets = column
+    points = np.random.default_rng(3).uniform([0.1, 0.1, 0.1], [B - 0.1, B - 0.1, L - 0.1], size=(200, 3))
+    cells, where = elasticity.locate(nodes, tets, points, neighbours=neighbours)
+    finder = skfem.MeshTet(nodes.T.copy(), tets.T.copy()).element_finder()
+    assert (cells == finder(*points.T)).all() and (where == points).all()
+    outside, moved = elasticity.locate(nodes, tets, [[B + 1.0, 1.0, 5.0]])
+    assert moved[0] == pytest.approx([B, 1.0, 5.0])  # onto the nearest face, in the tetrahedron of that face
+    assert elasticity.barycentric(nodes, tets, outside, moved).min() >= -1e-9
