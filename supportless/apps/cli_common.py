@@ -1,8 +1,9 @@
 """What the commands share: exit statuses, one-line errors, loading a rig, the rig and search options.
 
-Separate from :mod:`supportless.apps.cli` so that commands in other modules
-(:mod:`supportless.apps.cli_batch`) use the same options and errors without
-importing the command group.
+Separate from :mod:`supportless.apps.cli` (the command group) so that the
+commands, each in its own module (:mod:`supportless.apps.cli_optimize`,
+:mod:`supportless.apps.cli_batch`, ...), use the same options and errors without
+importing the group.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from ..base.errors import SupportlessError
+from ..base.errors import InputError, SupportlessError
 from ..base.terminal import ClosableStdout, drop_stdout
 from ..files.printframe import REFERENCE_HEIGHT_MM
 
@@ -314,26 +315,6 @@ def _require_slicer(option: str, choice=None) -> None:
         sys.exit(EXIT_MISSING_TOOL)
 
 
-def _contact_line(report: dict) -> str:
-    """Lines: the best answer printed standing beside the answer (when it is another), the skinning that posed
-    the answer, and its contacts merged as written."""
-    contacts = report.get("contacts") or []
-    line = ""
-    standing = report.get("standing")
-    if standing and not standing["is_answer"] and standing["answer_turned_deg"] >= 1.0:  # the answer is turned
-        line = (f"standing as displayed: {standing['standing_g']:.1f} g of support ({standing['source']}); the "
-                f"answer, turned {standing['answer_turned_deg']:.0f}° to print: {standing['answer_g']:.1f} g "
-                "(--standing-out writes the standing one)\n")
-    line += f"posed by {report.get('skinning', 'linear blend skinning')}"
-    between = sorted((c for c in contacts if c["parts"][0] != c["parts"][1]), key=lambda c: -c["pairs"])
-    if contacts:
-        named = [f"{c['parts'][0].split(':')[-1]} with {c['parts'][1].split(':')[-1]}" for c in between[:4]]
-        more = len(between) - len(named)
-        line += (f"; {contacts[0]['overlap_mm3']:,.0f} mm³ of contact merged into one solid as written ("
-                 + ", ".join(named) + (f" and {more} more" if more > 0 else "") + ")")
-    return line
-
-
 def _check_bones_early(settings, model, skeleton) -> None:
     """--fix, --free and --limit against a TGF skeleton before the (long) rig preparation."""
     from ..files.meshes import read_tgf
@@ -343,34 +324,18 @@ def _check_bones_early(settings, model, skeleton) -> None:
         settings.check_bones(len(read_tgf(tgf)[1]))
 
 
-def strength_rows(report: dict) -> list[tuple[str, str, str, str]]:
-    """The summary table's strength row: the safety factors of the rest pose and the answer, and the answer's
-    weakest section in a line (:func:`~supportless.report.report.strength_line`)."""
-    from ..report.report import strength_line
-
-    s = report.get("strength")
-    if not s:
-        return []
-
-    def factor(part):
-        return "never pulled" if s[part]["safety_factor"] is None else f"{s[part]['safety_factor']:.2f}"
-
-    return [(f"safety factor ({s['material']['name']}, {s['load_n']:g} N grip)", factor("rest"), factor("answer"),
-             strength_line(s) or "")]
+def _inputs(model, skeleton=None, tets=None, weights=None, *more):
+    """The files a command reads: MODEL, its skeleton (given or MODEL.tgf), tets, weights and ``more``."""
+    default_skeleton = Path(model).with_suffix(".tgf") if model and not str(model).startswith("demo:") else None
+    return [p for p in (model, skeleton, default_skeleton, tets, weights, *more) if p]
 
 
-def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
-    """One line per answer weighed, and who chose."""
-    for i, c in enumerate(choice.candidates):
-        sliced = "" if c.sliced_mm is None else f", {label} {c.sliced_mm:.0f} mm"
-        mark = ("  <- chosen" if i == choice.chosen else "") + \
-            ("" if c.same_as is None else f"  (prints as answer {c.same_as + 1})")
-        console.print(f"  {i + 1}. {c.kind:<13} predicted {c.predicted_mm:6.0f} mm{sliced}{mark}")
-    who = label if choice.by == "slicer" else "the slicer model" + \
-        ("" if slicer_tried else f" ({label} not found or not asked for: nothing sliced)")
-    console.print(f"  chosen by {who}: {choice.reason}")
-    refused = (choice.strength or {}).get("refused") or []
-    if refused:
-        console.print(f"  left out as weaker than the rest pose (safety {choice.strength['rest_safety_factor']}) and "
-                      f"{choice.strength['floor']:g}: " + ", ".join(
-                          f"{r['kind']} {r['predicted_mm']:.0f} mm (safety {r['safety_factor']})" for r in refused))
+def _check_mesh_path(path) -> None:
+    """A mesh output path with a known format, or InputError (None is allowed)."""
+    from ..files.meshes import MESH_FORMATS
+
+    if path is None:
+        return
+    ext = Path(path).suffix.lower().lstrip(".")
+    if ext not in MESH_FORMATS + ("gltf",):
+        raise InputError(path, f"unknown output format '.{ext}'; use one of {', '.join(MESH_FORMATS + ('gltf',))}")
