@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 __all__ = ["CHUNK", "barycentric", "block_pattern", "body_force_density", "boundary_faces", "check_fixed",
            "held_nodes", "hooke", "lame_parameters", "load_patch", "load_vector", "locate", "point_load_density",
-           "prolongation", "restrict_blocks", "scalar_basis", "stiffness_matrix", "tet_volumes"]
+           "prolongation", "restrict_blocks", "scalar_basis", "stiffness_matrix"]
 
 #: Elements assembled per chunk (bounds the memory of the element matrices: 4000 P2 tets are 29 MB).
 CHUNK = 4000
@@ -90,23 +90,6 @@ def scalar_basis(nodes: np.ndarray, tets: np.ndarray, order: int):
                          np.ascontiguousarray(np.asarray(tets, np.int64).T))
     element = skfem.ElementTetP2() if order == 2 else skfem.ElementTetP1()
     return skfem.Basis(mesh, element, intorder=2)
-
-
-def tet_volumes(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Unsigned volumes of tetrahedra.
-
-    Parameters
-    ----------
-    nodes : (t, 3) float64
-    tets : (k, 4) int64
-
-    Returns
-    -------
-    volumes : (k,) float64
-    """
-    a = nodes[tets[:, 0]]
-    edges = nodes[tets[:, 1:]] - a[:, None, :]
-    return np.abs(np.linalg.det(edges)) / 6.0
 
 
 def _vector_dofs(element_dofs: np.ndarray) -> np.ndarray:
@@ -271,8 +254,9 @@ def locate(nodes: np.ndarray, tets: np.ndarray, points: np.ndarray, neighbours: 
     """The tetrahedron containing each point; points outside the mesh go to its nearest boundary point.
 
     The ``neighbours`` tetrahedra with the nearest centroids are tried first, then every tetrahedron whose
-    bounding box holds the point. A point in none (outside the mesh) is moved to the nearest point of the mesh's boundary surface (libigl's
-    point-to-mesh distance) and takes the tetrahedron of that boundary triangle: the nearest tetrahedron.
+    bounding box holds the point. A point in none (outside the mesh) is moved to the nearest point of the
+    mesh's boundary surface (libigl's point-to-mesh distance) and takes the tetrahedron of that boundary
+    triangle: the nearest tetrahedron.
 
     Parameters
     ----------

@@ -173,7 +173,7 @@ def elastic_solution(nodes, tets, fixed, load_points=None, load_forces=None, bod
     if order == 2 and 3 * int((~held).sum()) > multigrid.DIRECT_DOFS:
         coarse = (stiffness_matrix(scalar_basis(nodes, tets, 1), lam, mu), prolongation(basis))
     t1 = time.perf_counter()
-    u, info = multigrid.solve_held(K, f, held, nodes, coarse)
+    u, info = multigrid.solve_held(K, f, held, np.asarray(basis.doflocs).T, coarse)
     info.update(assembly_seconds=t1 - t0, solve_seconds=time.perf_counter() - t1)
     return ElasticSolution(nodes, tets, order, float(young_mpa), float(poisson), basis, u, fixed, info)
 

@@ -39,7 +39,7 @@ def test_the_rest_pose_is_the_rest_tets_scaled_to_the_height_along_z(column_rig)
     expected = print_frame(column_rig.vertices, column_rig.up, 50.0).place(column_rig.tet_vertices)
     assert nodes == pytest.approx(expected, abs=1e-9)
     assert nodes[:, 2].min() == pytest.approx(0.0, abs=1e-12) and np.ptp(nodes[:, 2]) == pytest.approx(50.0)
-    assert np.ptp(nodes[:, 0]) == pytest.approx(10.0) and np.ptp(nodes[:, 1]) == pytest.approx(10.0)  # 4 x 4 scaled by 2.5
+    assert np.ptp(nodes[:, 0]) == pytest.approx(10.0) and np.ptp(nodes[:, 1]) == pytest.approx(10.0)  # 4 x 4, x 2.5
     assert (tets == column_rig.tets).all()
 
 
