@@ -119,6 +119,10 @@ class Section:
     area_mm2 : float
     faces : (·,) int64
         Faces the section cuts.
+    normal : (3,) float64
+        The section's plane's unit normal, towards the free part for a bone section (+Z for a layer's).
+    grip : (3,) float64
+        The worst grip's unit direction on the free part (zero when no grip loads the section).
     """
 
     kind: str
@@ -133,23 +137,27 @@ class Section:
     chain_end: int
     area_mm2: float
     faces: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0, np.int64))
+    normal: np.ndarray = field(repr=False, default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+    grip: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(3))
 
 
 def _verdict(points, area, J, sign, weight_force, weight_lever, grips, strength, load_n):
-    """``(safety, stress, breaks_at, chain_end)`` of a section under its free part's weight and grips.
+    """``(safety, stress, breaks_at, chain_end, grip)`` of a section under its free part's weight and grips.
 
-    ``grips`` is a list of ``(chain_end, share, lever (3,))``; the rest as :func:`grip_stress`."""
+    ``grips`` is a list of ``(chain_end, share, lever (3,))``; ``grip (3,)`` is the worst grip's unit direction
+    in the section's axes (zero when none loads it); the rest as :func:`grip_stress`."""
     sigma_w = grip_stress(points, area, J, weight_lever, sign) @ weight_force if weight_force is not None else \
         np.zeros(len(points))
     worst = np.zeros(len(points))
     which = np.full(len(points), -1)
+    g = None
     if grips:
         ends = np.array([e for e, _, _ in grips])
         shares = np.array([w for _, w, _ in grips])
-        g = shares[:, None] * np.linalg.norm(grip_stress(points, area, J, np.array([x for _, _, x in grips]), sign),
-                                             axis=2)  # (E, q)
-        best = np.argmax(g, axis=0)
-        worst = g[best, np.arange(len(points))]
+        g = shares[:, None, None] * grip_stress(points, area, J, np.array([x for _, _, x in grips]), sign)
+        size = np.linalg.norm(g, axis=2)  # (E, q)
+        best = np.argmax(size, axis=0)
+        worst = size[best, np.arange(len(points))]
         which = np.where(worst > 0, ends[best], -1)
     total = sigma_w + load_n * worst
     i = int(np.argmax(total))
@@ -158,7 +166,8 @@ def _verdict(points, area, J, sign, weight_force, weight_lever, grips, strength,
     with np.errstate(divide="ignore", invalid="ignore"):
         breaks = np.where(worst > 0, (strength - sigma_w) / worst, np.inf)
     breaks = float(max(breaks.min(), 0.0))
-    return safety, stress, breaks, int(which[i])
+    grip = np.zeros(3) if g is None or worst[i] <= 0 else g[best[i], i] / worst[i]
+    return safety, stress, breaks, int(which[i]), grip
 
 
 # ------------------------------------------------------------------------------------------------- the skeleton
@@ -456,12 +465,13 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
             lever = moment / volume - c3 if volume > 0 else np.zeros(3)
             pts = points[s] - cut.centroid[s]
             gl = [(int(ends[e]), share, end_points[e] - c3) for e, share in shares.items()]
-            safety, stress, breaks, end = _verdict(pts, cut.area[s], cut.J[s], sign, weight, lever, gl,
-                                                   mat.across_mpa, load_n)
+            safety, stress, breaks, end, grip = _verdict(pts, cut.area[s], cut.J[s], sign, weight, lever, gl,
+                                                         mat.across_mpa, load_n)
             faces = cut.section_faces[s]
             bone = int(np.bincount(labels[faces]).argmax()) if len(faces) else -1
             out.append(Section("layer", float(cut.planes[k] - z0), c3, bone, True, float(safety), stress,
-                               mat.across_mpa, breaks, end, float(cut.area[s]), faces))
+                               mat.across_mpa, breaks, end, float(cut.area[s]), faces, np.array([0.0, 0.0, 1.0]),
+                               grip))
     return out
 
 
@@ -540,8 +550,8 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
             lever = local(mom / vol - centroid) if vol > 0 else np.zeros(3)
             gl = [(int(ends[e]), 1.0, local(Jt[ends[e]] - centroid)) for e in gripped]
             strength = float(effective_strength(mat, n[2]))
-            safety, stress, breaks, end = _verdict(pts, area, J2, 1.0, weight, lever, gl, strength, load_n)
+            safety, stress, breaks, end, grip = _verdict(pts, area, J2, 1.0, weight, lever, gl, strength, load_n)
             across = mostly_across(mat, n[2])
             out.append(Section("bone", float(centroid[2] - z0), centroid, i, bool(across), float(safety), stress,
-                               strength, breaks, end, area, faces))
+                               strength, breaks, end, area, faces, n, basis.T @ grip))
     return out

@@ -195,3 +195,20 @@ def test_the_profiles_filament_is_the_material():
     assert material_of(None).name == "PLA"
     assert material_of(PrinterProfile(raw={"filament_type": "PETG"})).name == "PETG"
     assert material_of(PrinterProfile(raw={"filament_type": "NYLON"})).name == "PLA"  # unknown: the default
+
+
+def test_the_worst_grip_on_a_square_column_pulls_along_a_diagonal():
+    """Its corner fibre is stretched most by a grip across the diagonal, tilted up by the axial share."""
+    m = box((4, 4, 40), (0, 0, 20))
+    s = analyse_strength(m.vertices, m.faces, np.array([[0, 0, 0], [0, 0, 40.0]]), np.array([[0, 1]]),
+                         material=WEIGHTLESS, held_mm=1.0)
+    u = s.weakest.grip
+    assert np.linalg.norm(u) == pytest.approx(1.0)
+    assert abs(u[0]) == pytest.approx(abs(u[1]), rel=1e-6) and abs(u[2]) < 0.05
+    # the stress of that grip at its worst corner, by M·c/I about both axes and F/A: the section's stress
+    lever = 40.0 - s.weakest.height_mm
+    I, c = 4 ** 4 / 12.0, 2.0
+    corner = np.array([np.sign(-u[0]) * c, np.sign(-u[1]) * c])  # where a grip this way pulls
+    M = np.cross([0, 0, lever], 2.0 * u)
+    sigma = 2.0 * u[2] / 16.0 + (M[0] * corner[1] - M[1] * corner[0]) / I
+    assert abs(sigma) == pytest.approx(s.weakest.stress_mpa, rel=1e-6)
