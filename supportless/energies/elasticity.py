@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
 __all__ = ["CHUNK", "barycentric", "block_pattern", "body_force_density", "boundary_faces", "check_fixed",
            "held_nodes", "hooke", "lame_parameters", "load_patch", "load_vector", "locate", "point_load_density",
@@ -110,8 +111,8 @@ def _element_stiffness(grad: np.ndarray, dx: np.ndarray, lam: float, mu: float) 
 
     Returns
     -------
-    Ke : (e, b, b, 3, 3) float64
-        ``Ke[e, a, c, i, j]``: the force along ``i`` on basis function ``a`` of a unit displacement along
+    Ke : (e, b, 3, b, 3) float64
+        ``Ke[e, a, i, c, j]``: the force along ``i`` on basis function ``a`` of a unit displacement along
         ``j`` of ``c``.
     """
     b, _, e, q = grad.shape
@@ -120,7 +121,7 @@ def _element_stiffness(grad: np.ndarray, dx: np.ndarray, lam: float, mu: float) 
     trace = np.einsum("eaici->eac", A)
     K = lam * A + mu * A.transpose(0, 1, 4, 3, 2)
     K += mu * trace[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
-    return K.transpose(0, 1, 3, 2, 4)
+    return K
 
 
 def block_pattern(element_dofs: np.ndarray, n: int) -> tuple[sp.csr_matrix, np.ndarray]:
@@ -149,6 +150,17 @@ def block_pattern(element_dofs: np.ndarray, n: int) -> tuple[sp.csr_matrix, np.n
     return pattern, where.reshape(E.shape[0], E.shape[1], E.shape[1])
 
 
+@njit(cache=True)
+def _scatter_blocks(where, Ke, blocks):  # pragma: no cover - compiled
+    for e in range(where.shape[0]):
+        for a in range(where.shape[1]):
+            for c in range(where.shape[2]):
+                w = where[e, a, c]
+                for i in range(3):
+                    for j in range(3):
+                        blocks[w, i, j] += Ke[e, a, i, c, j]
+
+
 def stiffness_matrix(basis, lam: float, mu: float) -> sp.bsr_matrix:
     """The elasticity stiffness matrix on a scalar basis, in 3 × 3 blocks, assembled by chunks of elements.
 
@@ -169,12 +181,8 @@ def stiffness_matrix(basis, lam: float, mu: float) -> sp.bsr_matrix:
     blocks = np.zeros((pattern.nnz, 3, 3))
     for lo in range(0, where.shape[0], CHUNK):
         hi = min(lo + CHUNK, where.shape[0])
-        Ke = _element_stiffness(grad[:, :, lo:hi], basis.dx[lo:hi], lam, mu).reshape(-1, 3, 3)
-        at = where[lo:hi].ravel()
-        order = np.argsort(at, kind="stable")
-        at = at[order]
-        starts = np.flatnonzero(np.concatenate([[True], at[1:] != at[:-1]]))
-        blocks[at[starts]] += np.add.reduceat(Ke[order], starts, axis=0)
+        Ke = _element_stiffness(grad[:, :, lo:hi], basis.dx[lo:hi], lam, mu)
+        _scatter_blocks(where[lo:hi], Ke, blocks)
     return sp.bsr_matrix((blocks, pattern.indices, pattern.indptr), shape=(3 * basis.N, 3 * basis.N))
 
 
