@@ -49,7 +49,7 @@ def test_a_vertical_cantilever_bends_as_beam_theory_says(column):
     assert section.normal_stress.min() == pytest.approx(-expected, rel=0.05)
     sigma = stress_at(solution, [[0.0, B / 2, L / 2], [B, B / 2, L / 2], [B / 2, B / 2, L / 2]])[:, 2, 2]
     assert sigma == pytest.approx([expected, -expected, 0.0], rel=0.05, abs=0.02 * expected)
-    assert solution.info["solver"] == "multigrid-cg" and solution.info["residual"] < 1e-7
+    assert solution.info["solver"] == "multigrid-cg" and solution.info["residual"] <= 1e-6
     # the tip moves as far as the cantilever's F L^3 / (3 E I) (shear adds a few per mille)
     tip = solution.node_displacement[nodes[:, 2] == L, 0].mean()
     assert tip == pytest.approx(F * L ** 3 / (3 * 3500.0 * I_SECTION), rel=0.03)
