@@ -33,9 +33,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from . import multigrid
 from .elasticity import (body_force_density, check_fixed, held_nodes, hooke, lame_parameters, load_vector, locate,
                          prolongation, scalar_basis, stiffness_matrix)
-from . import multigrid
 
 __all__ = ["PLA_GRAVITY", "ElasticSolution", "SectionStress", "elastic_solution", "plate_nodes",
            "section_normal_stress", "section_stress", "stress_at", "stress_in"]
