@@ -19,18 +19,15 @@ def test_listeners_hear_each_step_start_and_end_nested_and_after_an_error():
                      ("done", "outer", False), ("start", "failing", True), ("done", "failing", False)]
 
 
-def test_a_search_of_a_dense_rig_announces_its_full_resolution_stages(tmp_path, monkeypatch):
+def test_a_search_of_a_dense_rig_announces_its_full_resolution_stages(tmp_path, monkeypatch, shared_file):
     """Each long full-resolution stage of optimize on a rig with a proxy is a step (the bunny, 6966 triangles,
     the proxy threshold lowered to it)."""
     import supportless as sl
-    from supportless.apps.bench import SHARED_DATA
     from supportless.files.meshes import read_mesh, read_tgf
     from supportless.rig import rig as rig_mod
 
-    if not (SHARED_DATA / "bunny.obj").is_file():
-        pytest.skip(f"the shared bunny is not in {SHARED_DATA}")
-    V, F = read_mesh(SHARED_DATA / "bunny.obj")
-    J, B = read_tgf(SHARED_DATA / "bunny.tgf")
+    V, F = read_mesh(shared_file("bunny.obj"))  # skipped without the shared models, failed under CI
+    J, B = read_tgf(shared_file("bunny.tgf"))
     monkeypatch.setattr(rig_mod, "PROXY_FACES", 5000)
     monkeypatch.setattr(rig_mod, "PROXY_TARGET", 2000)
     heard = []
