@@ -1,7 +1,9 @@
 """Interactive viewer and editor (a local web page served with viser).
 
 * :mod:`supportless.apps.ui.state`: the editing state (pose, undo/redo, files,
-  search settings, measures, background search), usable without a browser;
+  search settings, measures, background search), usable without a browser; its parts
+  :mod:`supportless.apps.ui.editing` (the pose, undo/redo), :mod:`supportless.apps.ui.posefiles`
+  (pose files, exported meshes) and :mod:`supportless.apps.ui.searchrun` (the search in the background);
 * :mod:`supportless.apps.ui.scene`: the 3D view; :mod:`supportless.apps.ui.panel`: the
   side panel; :mod:`supportless.apps.ui.ports`: which port the server takes;
 * :mod:`supportless.apps.ui.opener`: models sent from the page; :mod:`supportless.apps.ui.slicerun`: the
