@@ -31,6 +31,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from .materials import DEFAULT_MATERIAL, MATERIALS, Material, effective_strength, mostly_across
 from .sections import LayerSections, group_by, layer_sections, mesh_edges, outline_around, plane_frame
@@ -387,11 +389,13 @@ def _carry(sections, area, above_root, below_root, loads_above, loads_below):
     """The loads each section of one plane carries: the free parts' loads passed towards the held ones.
 
     Parameters: the plane's sections, their areas, their parts above and below (roots) and those parts' loads
-    (``(volume, moment, {end: share}, held)``). Parallel sections share a part's loads in proportion to area.
+    (``(volume, moment, {end: share}, held)``). The sections through which one free part rests on the parts
+    nearer the plate carry its loads together, as one section (the part joins them rigidly: two legs under a
+    pelvis bend as a frame, pushing and pulling); what they pass on is shared in proportion to their areas.
 
     Returns
     -------
-    list of ``(section, sign, (volume, moment (3,), {end: share}))``: sign +1 where the free part is above.
+    list of ``(sections, sign, (volume, moment (3,), {end: share}))``: sign +1 where the free part is above.
     """
     nodes = {}
     for s in sections:
@@ -425,10 +429,10 @@ def _carry(sections, area, above_root, below_root, loads_above, loads_below):
             shares[e] = shares.get(e, 0.0) + w
         toward = [(s, v) for s, v in nodes[u] if distance[v] == distance[u] - 1]
         total = sum(area[s] for s, _ in toward)
+        out.append(([s for s, _ in toward], 1.0 if u[0] == "A" else -1.0, (vol, mom, shares)))
         for s, v in toward:
             w = area[s] / total
             part = (vol * w, mom * w, {e: x * w for e, x in shares.items()})
-            out.append((s, 1.0 if u[0] == "A" else -1.0, part))
             pv, pm, ps = carried[v]
             for e, x in part[2].items():
                 ps[e] = ps.get(e, 0.0) + x
@@ -459,20 +463,39 @@ def _layer_verdicts(V, cut: LayerSections, labels, ends, end_points, mat, weight
     for k in range(len(cut.planes)):
         sections = np.flatnonzero(cut.layer == k)
         la, lb = la_k[k], lb_k[k]
-        for s, sign, (volume, moment, shares) in _carry(sections, cut.area, above_root, below_root, la, lb):
-            c3 = np.array([cut.centroid[s, 0], cut.centroid[s, 1], cut.planes[k]])
+        for group, sign, (volume, moment, shares) in _carry(sections, cut.area, above_root, below_root, la, lb):
+            A = cut.area[group].sum()  # the group's sections as one: area, centroid, second moments
+            c = (cut.area[group, None] * cut.centroid[group]).sum(axis=0) / A
+            d = cut.centroid[group] - c
+            J = (cut.J[group] + cut.area[group, None, None] * d[:, :, None] * d[:, None, :]).sum(axis=0)
+            c3 = np.array([c[0], c[1], cut.planes[k]])
             weight = np.array([0.0, 0.0, -weight_per_mm3 * volume]) if volume > 0 else None
             lever = moment / volume - c3 if volume > 0 else np.zeros(3)
-            pts = points[s] - cut.centroid[s]
             gl = [(int(ends[e]), share, end_points[e] - c3) for e, share in shares.items()]
-            safety, stress, breaks, end, grip = _verdict(pts, cut.area[s], cut.J[s], sign, weight, lever, gl,
-                                                         mat.across_mpa, load_n)
-            faces = cut.section_faces[s]
-            bone = int(np.bincount(labels[faces]).argmax()) if len(faces) else -1
-            out.append(Section("layer", float(cut.planes[k] - z0), c3, bone, True, float(safety), stress,
-                               mat.across_mpa, breaks, end, float(cut.area[s]), faces, np.array([0.0, 0.0, 1.0]),
-                               grip))
+            for s in group:
+                safety, stress, breaks, end, grip = _verdict(points[s] - c, A, J, sign, weight, lever, gl,
+                                                             mat.across_mpa, load_n)
+                faces = cut.section_faces[s]
+                bone = int(np.bincount(labels[faces]).argmax()) if len(faces) else -1
+                centre = np.array([cut.centroid[s, 0], cut.centroid[s, 1], cut.planes[k]])
+                out.append(Section("layer", float(cut.planes[k] - z0), centre, bone, True, float(safety), stress,
+                                   mat.across_mpa, breaks, end, float(cut.area[s]), faces,
+                                   np.array([0.0, 0.0, 1.0]), grip))
     return out
+
+
+def _hangs_free(V, F, edges, faces, origin, normal, held_below) -> bool:
+    """Whether the surface beyond a section (reached from its outline's ``faces`` without crossing the plane
+    through ``origin`` square to ``normal``) stays clear of the held part (``z < held_below``)."""
+    beyond = (V - origin) @ normal > 0
+    inner = beyond[edges[:, 0]] & beyond[edges[:, 1]]
+    n = len(V)
+    graph = sp.coo_matrix((np.ones(int(inner.sum())), (edges[inner, 0], edges[inner, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    start = np.unique(F[faces].ravel())
+    start = start[beyond[start]]
+    reached = np.isin(label, np.unique(label[start]))
+    return not bool(np.any(reached & beyond & (V[:, 2] < held_below)))
 
 
 def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_below):
@@ -532,6 +555,7 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
         for _ in range(2):  # the bones within two joints: a limb's outline lies on their faces
             ring |= {bone for k in ring for j in B[k] for bone, _ in adjacency.get(int(j), [])}
         nearby = np.concatenate([by_bone[k] for k in sorted(ring)])
+        checked = False
         for frac in BONE_SAMPLES:
             origin = Jt[near] + frac * (Jt[far] - Jt[near])
             outline = outline_around(V, F, edges, face_edges, origin, basis, nearby)
@@ -542,6 +566,10 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
             pts, area, J2, centroid, faces = outline
             if centroid[2] < held_below:  # in the hand that holds the figure
                 continue
+            if not checked:  # a limb whose far side rests on the plate too (a staff) is no cantilever
+                if not _hangs_free(V, F, edges, faces, origin, n, held_below):
+                    break
+                checked = True
             beyond = own[(cone_centroid[own] - origin) @ n > 0]
             vol = base_volume + volume[beyond].sum()
             mom = base_moment + (volume[beyond, None] * cone_centroid[beyond]).sum(axis=0)
