@@ -4,12 +4,12 @@
 ``supportless`` process alone (``kill -INT PID``, not a terminal's Ctrl-C to the whole group) must reach that
 child, stop the search and write its best pose so far with exit status 130. For each moment, the tool is
 started afresh and the signal sent once the search reached that evaluation (a patched
-``Objective.bounded_overlap`` creates a file there, as in ``tests/apps/test_cli_lifetime.py``); a moment
-counts as kept when the status is 130, the tool says the best pose so far is written, the posed mesh, the
-pose and the report are complete and the pose written is no worse than the rest pose. (The report's
-``interrupted`` is the kept answer's: a figure with a mirror plane stopped during its free search keeps the
-finished mirrored answer when it is the better one, and that answer was not interrupted.) Prints one line per
-moment and ``k/6``.
+``Objective.bounded_overlap`` creates a file there: ``optimize_marked`` of ``tests/processes.py``, which
+``tests/apps/test_cli_lifetime.py`` uses too); a moment counts as kept when the status is 130, the tool says
+the best pose so far is written, the posed mesh, the pose and the report are complete and the pose written
+is no worse than the rest pose. (The report's ``interrupted`` is the kept answer's: a figure with a mirror
+plane stopped during its free search keeps the finished mirrored answer when it is the better one, and that
+answer was not interrupted.) Prints one line per moment and ``k/6``.
 
     python benchmarks/interrupt.py [--model demo:tpose] [--at 1 40 120 220 320 420] [--group]
 
@@ -31,36 +31,14 @@ from pathlib import Path
 
 import supportless as sl
 
-#: The ``supportless`` executable, creating ``$MARKER`` at the ``$AT``-th evaluation of the search.
-TOOL = """
-import os, sys
-from pathlib import Path
-from supportless.search.objective import Objective
-
-calls, bounded = [0], Objective.bounded_overlap
-
-def counted(self, *args, **options):
-    calls[0] += 1
-    if calls[0] == int(os.environ["AT"]):
-        Path(os.environ["MARKER"]).touch()
-    return bounded(self, *args, **options)
-
-Objective.bounded_overlap = counted
-sys.argv[0] = "supportless"
-from supportless.apps.cli import run
-run()
-"""
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from processes import optimize_marked  # noqa: E402 - the tests' helper: the tool that marks an evaluation
 
 
 def interrupt_at(model: str, at: int, group: bool, folder: Path) -> tuple[str | None, float]:
     """One run stopped at evaluation ``at``: why the best pose was not kept (None when it was), and the seconds
     from the signal to the tool's end."""
-    marker = folder / "searching"
-    proc = subprocess.Popen([sys.executable, "-c", TOOL, "optimize", model, "-q", "--slice-rank", "0",
-                             "-o", str(folder / "posed.stl"), "--pose", str(folder / "pose.json"),
-                             "--report", str(folder / "report.json")],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, env=dict(os.environ, AT=str(at), MARKER=str(marker)))
+    proc, marker = optimize_marked([model], folder, at, stdout=subprocess.DEVNULL, start_new_session=True)
     while not marker.exists() and proc.poll() is None:
         time.sleep(0.05)
     if not marker.exists():

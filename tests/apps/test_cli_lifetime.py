@@ -19,43 +19,17 @@ from pathlib import Path
 
 import pytest
 from conftest import until
-from processes import descendants, gone, linux_only
+from processes import descendants, gone, linux_only, optimize_marked
 
 import supportless as sl
 
 pytestmark = [pytest.mark.skipif(not hasattr(os, "fork"), reason="supervision forks; this platform cannot"),
               linux_only, pytest.mark.slow]
 
-#: The ``supportless`` executable (:func:`supportless.apps.cli.run`), creating the file ``$MARKER`` at the
-#: ``$AT``-th evaluation of the search: the test's signal then comes while the search runs.
-_TOOL = """
-import os, sys
-from pathlib import Path
-from supportless.search.objective import Objective
-
-calls, bounded = [0], Objective.bounded_overlap
-
-def counted(self, *args, **options):
-    calls[0] += 1
-    if calls[0] == int(os.environ["AT"]):
-        Path(os.environ["MARKER"]).touch()
-    return bounded(self, *args, **options)
-
-Objective.bounded_overlap = counted
-sys.argv[0] = "supportless"
-from supportless.apps.cli import run
-run()
-"""
-
 
 def optimize_until(model: list[str], out: Path, at: int, *options: str) -> subprocess.Popen:
     """``supportless optimize MODEL`` writing into ``out``, once its search reached evaluation ``at`` (else ended)."""
-    marker = out / "searching"
-    proc = subprocess.Popen([sys.executable, "-c", _TOOL, "optimize", *model, "-q", "--slice-rank", "0",
-                             "-o", str(out / "posed.stl"), "--pose", str(out / "pose.json"),
-                             "--report", str(out / "report.json"), *options],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=dict(os.environ, AT=str(at), MARKER=str(marker)))
+    proc, marker = optimize_marked(model, out, at, *options, stdout=subprocess.PIPE)
     assert until(lambda: marker.exists() or proc.poll() is not None, 600), "the search never started"
     assert marker.exists(), f"the tool ended before evaluation {at}: {proc.communicate()[1]}"
     return proc

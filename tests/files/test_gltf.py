@@ -489,6 +489,19 @@ def check_posed_file(rig, written, angles, source_path, normalise: bool = False,
     return int(on.sum())
 
 
+def pose_and_check(rig, source_path, out, seed: int, spread: float) -> int:
+    """Write ``source_path`` posed by random angles (uniform in ±``spread`` rad, generator ``seed``) to ``out``.
+
+    The joints get the rig's transforms (:func:`posed_joint_transforms`); returns :func:`check_posed_file` of
+    the written file against ``rig.pose`` of those angles (how many vertices were compared).
+    """
+    source = rig.info["gltf"]
+    angles = np.random.default_rng(seed).uniform(-spread, spread, (rig.bone_count, 3))
+    write_posed_gltf(source_path, out, posed_joint_transforms(rig.transforms(angles), source["driver"],
+                                                              source["scale"]), source["joint_nodes"])
+    return check_posed_file(rig, out, angles, source_path)
+
+
 def check_posed_surface(rig, written, angles, skin, doc, normalise: bool = True) -> float:
     """Check a posed file against ``rig.pose(angles)`` where the print body was remade (no shared vertices).
 
@@ -834,12 +847,7 @@ def test_posing_round_trip_through_the_written_asset(tmp_path, cache):
 def test_a_skin_without_inverse_bind_matrices_round_trips(tmp_path, cache):
     path = write_gltf(character(), tmp_path / "no-ibm.glb", inverse_bind=False)
     rig = load(path, cache)
-    source = rig.info["gltf"]
-    angles = np.random.default_rng(6).uniform(-0.5, 0.5, (rig.bone_count, 3))
-    out = tmp_path / "posed.glb"
-    write_posed_gltf(path, out, posed_joint_transforms(rig.transforms(angles), source["driver"], source["scale"]),
-                     source["joint_nodes"])
-    assert check_posed_file(rig, out, angles, path) == 24
+    assert pose_and_check(rig, path, tmp_path / "posed.glb", seed=6, spread=0.5) == 24
 
 
 # --------------------------------------------------------------------------- #

@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import pygltflib
 import pytest
-from test_gltf import HALF, RINGS, check_posed_file, column, skinned_positions
+from test_gltf import HALF, RINGS, column, pose_and_check, skinned_positions
 
-from supportless.files.gltf import posed_joint_transforms, read_gltf_skin, write_posed_gltf
+from supportless.files.gltf import read_gltf_skin
 from supportless.files.meshes import read_mesh
 from supportless.files.upaxis import guess_up
 from supportless.rig.load import load_rig
@@ -217,12 +217,7 @@ def test_a_turned_and_scaled_skeleton_loads_standing_in_millimetres_and_poses_ba
     np.testing.assert_allclose([rig.vertices.min(0), rig.vertices.max(0)], [[-10, 0, -10], [10, 60, 10]], atol=1e-4)
     np.testing.assert_allclose(rig.joints[rig.bones[:, 0]], [[0, 0, 0], [0, 20, 0], [0, 40, 0]], atol=1e-4)
     # the posed file, skinned as glTF says, is the rig's pose: the joints' new locals undo the ancestors
-    source = rig.info["gltf"]
-    angles = np.random.default_rng(7).uniform(-0.6, 0.6, (rig.bone_count, 3))
-    out = tmp_path / "posed.glb"
-    write_posed_gltf(path, out, posed_joint_transforms(rig.transforms(angles), source["driver"], source["scale"]),
-                     source["joint_nodes"])
-    assert check_posed_file(rig, out, angles, path) == 24
+    assert pose_and_check(rig, path, tmp_path / "posed.glb", seed=7, spread=0.6) == 24
 
 
 def test_the_plain_mesh_reader_reads_a_rigged_glb_standing_and_up_stays_plus_y(tmp_path):
