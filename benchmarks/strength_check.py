@@ -33,7 +33,7 @@ from supportless.energies.strength_fem import elastic_solution, section_normal_s
 from supportless.rig.posed_volume import posed_tet_mesh
 from supportless.search.sturdiness import pose_strength, printed_body
 
-HEADING = "### The fast path against finite elements"
+HEADING = "## Strength: beam theory against finite elements"
 MODELS = ["tpose", "staff", "bb-bunny", "libigl/dinosaur", "libigl/hand", "gltf/Fox", "gltf/CesiumMan"]
 
 
