@@ -10,7 +10,9 @@
   Slice button's background run; :mod:`supportless.apps.ui.readout`: figures in words and human units;
   :mod:`supportless.apps.ui.filament`: the support filament the panel leads with (the summary's estimate, or the
   slicer's figure after a Slice);
-* :mod:`supportless.apps.ui.app`: :class:`App` wires them, :func:`run_app` serves the page.
+* :mod:`supportless.apps.ui.app`: :class:`App` wires them, :func:`run_app` serves the page; its parts
+  :mod:`supportless.apps.ui.actions` (what the page's controls do), :mod:`supportless.apps.ui.jobs` (opening
+  a model sent from the page, a Slice, the front) and :mod:`supportless.apps.ui.rendering` (the render thread).
 """
 
 from .app import App, run_app
