@@ -6,7 +6,9 @@
   skeletons from a glTF skin's joints, joints pulled inside the surface;
 * :mod:`.gltf_skin`: a glTF skin in its rest pose, every joint posed by its whole ancestry
   (:mod:`.gltf_decode`: Draco and meshopt); :mod:`.gltf`: the character from it, posed assets out;
-* :mod:`.printbody`: the one closed body to print from a character's overlapping parts;
+* :mod:`.printbody`: the one closed body to print from a character's overlapping parts
+  (:mod:`.crossings`: a surface that crosses itself made one solid; :mod:`.surfaceops`: the small
+  operations on a surface carrying values they are made of);
 * :mod:`.posefile`: pose files (their bone tree and print frame);
 * :mod:`.printframe`: the print frame (+Z up, millimetres, on the plate, the reference height);
 * :mod:`.printer`: printer profiles (the overhang threshold, filament units);

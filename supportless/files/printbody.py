@@ -20,6 +20,10 @@ and printed, step by step, and carries per-vertex values (skin weights) along:
    else the body is remade as the surface of its winding number.
 
 Each step reports one line with what it did and how the volume changed.
+Step 5 is :mod:`supportless.files.crossings`' (also what is printed of a posed
+figure whose parts press into each other); the small surface operations are
+:mod:`supportless.files.surfaceops`'. Their public names are importable from
+here too.
 """
 
 from __future__ import annotations
@@ -29,9 +33,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..base.errors import InputError
-from ..base.isolated import NativeFailure
-from ..copyleft.cgal import intersecting_faces, self_union
-from .simplify import simplify_surface
+from .crossings import (
+    ISLAND_MIN_VOLUME,
+    SIMPLIFY_TOLERANCE,
+    WINDING_CELLS,
+    _resolve_crossings,
+    united_surface,
+    winding_surface,
+)
+from .surfaceops import _collapse_short_edges, _components, _flip_caps, _volume, _weld, transfer_values
 
 __all__ = ["united_surface", "BRIDGE_GAP", "ISLAND_MIN_VOLUME", "SHELL_MIN_VOLUME", "WINDING_CELLS", "winding_surface", "PrintBody", "print_body",
            "transfer_values"]
@@ -45,26 +55,8 @@ SHELL_MIN_VOLUME = 1e-4
 #: hull of the facing parts): a hand that misses its wrist by a hair.
 BRIDGE_GAP = 0.01
 
-#: Solids still apart after bridging below this fraction of the volume are
-#: dropped (eyes floating in front of a face would print in the air); larger
-#: ones are kept as separate pieces, with a warning.
-ISLAND_MIN_VOLUME = 0.01
-
 #: Vertices closer than this fraction of the model's size are welded.
 WELD_TOLERANCE = 1e-6
-
-#: Grid cells along the longest side for the winding-number surface that
-#: replaces a body whose crossings an exact self-union cannot resolve (a cell
-#: is 0.4 mm on a 60 mm print).
-WINDING_CELLS = 160
-
-#: The winding-number surface is simplified to at most this many triangles
-#: (when the simplified one is closed and free of crossings).
-WINDING_MAX_FACES = 40_000
-
-#: After the union, edges shorter than this fraction of the size are collapsed:
-#: the needle and zero-area triangles a boolean leaves, which TetGen cannot mesh.
-SIMPLIFY_TOLERANCE = 1e-5
 
 
 @dataclass
@@ -91,35 +83,6 @@ class PrintBody:
     log: list = field(default_factory=list)
 
 
-def _volume(V: np.ndarray, F: np.ndarray) -> float:
-    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
-
-
-def _weld(V, F, values, tol):
-    """Merge vertices within ``tol`` of each other; values averaged. Returns V, F, values, merged count."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    if len(V) == 0:
-        return V, F, values, 0
-    pairs = cKDTree(V).query_pairs(tol, output_type="ndarray")
-    if len(pairs) == 0:
-        return V, F, values, 0
-    A = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(V), len(V)))
-    k, inverse = connected_components(A, directed=False)
-    first = np.arange(k)
-    count = np.bincount(inverse, minlength=k).astype(np.float64)
-    Vn = np.zeros((k, 3))
-    np.add.at(Vn, inverse, V)
-    Vn /= count[:, None]
-    Wn = np.zeros((len(first), values.shape[1]))
-    np.add.at(Wn, inverse, values)
-    Wn /= count[:, None]
-    return Vn, inverse[F], Wn, len(V) - len(first)
-
-
 def _clean_faces(F: np.ndarray, V: np.ndarray, area_eps: float) -> tuple[np.ndarray, int, int]:
     """Drop faces with a repeated vertex or (almost) no area, and duplicates (any winding)."""
     repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
@@ -129,18 +92,6 @@ def _clean_faces(F: np.ndarray, V: np.ndarray, area_eps: float) -> tuple[np.ndar
     _, first = np.unique(np.sort(F, axis=1), axis=0, return_index=True)
     dup = len(F) - len(first)
     return F[np.sort(first)], int(degenerate.sum()), dup
-
-
-def _components(F: np.ndarray, n: int) -> np.ndarray:
-    """(f,) int64: connected component (through shared vertices) of each face."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    f = len(F)
-    rows = np.repeat(np.arange(f), 3)
-    A = coo_matrix((np.ones(3 * f), (rows, F.ravel() + f)), shape=(f + n, f + n))
-    _, labels = connected_components(A, directed=False)
-    return np.unique(labels[:f], return_inverse=True)[1].ravel()
 
 
 def _boundary_loops(F: np.ndarray) -> list[list[int]]:
@@ -325,83 +276,6 @@ def print_body(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray, values
     return PrintBody(Vu, Fu, Wu, islands, log)
 
 
-def united_surface(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
-    """One closed solid from a surface that presses into itself: its exact self-union (CGAL), else the surface
-    of its winding number (as :func:`print_body`'s last step).
-
-    A posed figure whose arm rests against its torso crosses itself there; what is printed is the solid the
-    two parts make together.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float64
-    faces : (f, 3) int64
-        Closed, outward oriented.
-
-    Returns
-    -------
-    vertices : (n', 3) float64
-    faces : (f', 3) int64
-        The input when it does not cross itself.
-    merged : dict
-        ``pairs`` (crossing triangle pairs before), ``volume_before`` (the surface's enclosed volume, overlaps
-        counted twice), ``volume`` (the solid's), ``merged_volume`` (their difference: the volume two parts
-        shared), ``how`` ("none", "exact self-union" or "winding-number surface") and ``note`` (one line).
-    """
-    V, F = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
-    size = float(np.ptp(V, axis=0).max()) if len(V) else 1.0
-    pairs = len(intersecting_faces(V, F))
-    before = _volume(V, F)
-    log: list[str] = []
-    Vx, Fx, _ = _resolve_crossings(V, F, np.zeros((len(V), 0)), SIMPLIFY_TOLERANCE * size, log, pairs)
-    if pairs and len(intersecting_faces(Vx.astype(np.float32).astype(np.float64), Fx)):  # as an STL stores it
-        Vx, Fx = winding_surface(V, F, WINDING_CELLS)
-        log = [f"{pairs} pairs of crossing triangles: the exact self-union crosses itself once stored in single "
-               f"precision, so the body is the surface of its winding number on a {WINDING_CELLS}-cell grid"]
-    after = _volume(Vx, Fx)
-    how = "none" if not pairs else ("exact self-union" if "exact self-union" in log[0] else "winding-number surface")
-    return Vx, Fx, {"pairs": pairs, "volume_before": before, "volume": after, "merged_volume": before - after,
-                    "how": how, "note": log[0] if log else ""}
-
-
-def _resolve_crossings(V, F, values, tol, log, before=None):
-    """Remove crossing triangles: CGAL's exact self-union, else the winding-number surface.
-
-    The self-union keeps every detail; the slivers it leaves are collapsed
-    (and flattened caps flipped, unless that makes triangles cross again).
-    When it leaves crossings (also once rescaled: points left exactly on a
-    face) or edges shared by four triangles (parts that touch along an
-    edge), the body is remade from its winding number (:func:`winding_surface`):
-    closed, free of crossings, true to a grid cell of :data:`WINDING_CELLS`.
-    Returns the surface and its values (carried from the surface before by
-    closest point); ``log`` gets a line when there were crossings, and says
-    how many remain. ``before``: the crossing pairs, when counted already.
-    """
-    before = len(intersecting_faces(V, F)) if before is None else before
-    if before == 0:
-        return V, F, values
-    try:
-        Vx, Fx = self_union(V, F)
-        Vx, Fx, _, _ = _weld(Vx, Fx, np.zeros((len(Vx), 0)), tol * 1e-3)
-        Vx, Fx, _ = _collapse_short_edges(Vx, Fx, np.zeros((len(Vx), 0)), tol)
-        flipped = _flip_caps(Vx, Fx, tol)
-        if len(intersecting_faces(Vx, flipped)) == 0:
-            Fx = flipped
-        if len(Fx) and _is_closed(Fx) and not _touches_itself(Vx, Fx):
-            log.append(f"resolved {before} pairs of crossing triangles by an exact self-union "
-                       f"(volume {(_volume(Vx, Fx) / _volume(V, F) - 1) * 100:+.2f} %)")
-            return Vx, Fx, transfer_values(Vx, V, F, values)
-    except NativeFailure:
-        pass
-    Vx, Fx = winding_surface(V, F, WINDING_CELLS)
-    after = len(intersecting_faces(Vx, Fx))
-    log.append(f"{before} pairs of crossing triangles that an exact self-union could not resolve cleanly: the "
-               f"body remade as the surface of its winding number on a {WINDING_CELLS}-cell grid, {len(F)} -> "
-               f"{len(Fx)} triangles (volume {(_volume(Vx, Fx) / _volume(V, F) - 1) * 100:+.1f} %)"
-               + (f"; warning: {after} remain" if after else ""))
-    return Vx, Fx, transfer_values(Vx, V, F, values)
-
-
 def _winding_union(pieces, log):
     """The union of shells (some not manifold) as one winding-number surface, a manifold3d solid carrying values."""
     offsets = np.cumsum([0] + [len(V) for V, _, _ in pieces])
@@ -426,144 +300,6 @@ def _manifold(V, F, values):
         vert_properties=np.ascontiguousarray(np.hstack([V, values]), np.float64),
         tri_verts=np.ascontiguousarray(F, np.uint64)))
     return None if solid.status() != manifold3d.Error.NoError or solid.is_empty() else solid
-
-
-def _touches_itself(V, F) -> bool:
-    """Whether triangles cross, as given or rescaled (points a union leaves exactly on a face cross once rounded)."""
-    return any(len(intersecting_faces(V * k, F)) for k in (1.0, 1000.0 / np.sqrt(2.0), 1.0 / np.pi))
-
-
-def winding_surface(V, F, cells: int = WINDING_CELLS):
-    """The outer surface of (V, F) remade by marching cubes: inside by winding number, placed by distance.
-
-    Inside is where the shells wind around a point at least half a turn
-    (libigl's fast winding number), so overlapping and crossing shells are
-    one solid; the field marching cubes meets is that sign times the
-    distance to the surface (computed at the grid points next to a change of
-    sign: the others only need their sign), so the surface is as smooth as
-    the input, not a staircase of cells. On a grid of ``cells`` along the
-    longest side; closed, manifold, never crossing itself. Deterministic.
-
-    Returns vertices (k, 3) float64 and outward faces (g, 3) int64.
-    """
-    import igl
-
-    lo, hi = V.min(0), V.max(0)
-    h = float((hi - lo).max()) / cells
-    lo, hi = lo - 2 * h, hi + 2 * h
-    nx, ny, nz = (np.ceil((hi - lo) / h).astype(np.int64) + 1).tolist()
-    axes = [lo[i] + h * np.arange(n) for i, n in enumerate((nx, ny, nz))]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)  # x fastest
-    inside = (igl.fast_winding_number(V, F, np.ascontiguousarray(grid)) > 0.5).reshape(nz, ny, nx)
-    near = np.zeros_like(inside)
-    for axis in range(3):  # grid points with a neighbour across the surface
-        change = np.diff(inside, axis=axis)
-        lower = [slice(None)] * 3
-        upper = [slice(None)] * 3
-        lower[axis], upper[axis] = slice(0, -1), slice(1, None)
-        near[tuple(lower)] |= change
-        near[tuple(upper)] |= change
-    field = np.full(inside.shape, 2.0 * h)
-    d2 = igl.point_mesh_squared_distance(np.ascontiguousarray(grid[near.ravel()]), V, F)[0]
-    field[near] = np.minimum(np.sqrt(d2), 2.0 * h)
-    # no grid point exactly on the surface: marching cubes would put a vertex on it, shared by needle triangles
-    field = np.maximum(field, 1e-2 * h)
-    field = np.where(inside, -field, field).ravel()
-    out = igl.marching_cubes(np.ascontiguousarray(field), grid, nx, ny, nz, 0.0)
-    Vs, Fs = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
-    if len(Fs) and _volume(Vs, Fs) < 0:
-        Fs = Fs[:, ::-1]
-    # pockets the winding number left inside (closed voids) and crumbs go: a print body is solid
-    comp = _components(Fs, len(Vs))
-    vols = np.array([_volume(Vs, Fs[comp == c]) for c in range(comp.max() + 1)]) if len(Fs) else np.zeros(0)
-    Fs = Fs[vols[comp] >= ISLAND_MIN_VOLUME * vols[vols > 0].sum()] if len(Fs) else Fs
-    used = np.unique(Fs)
-    remap = np.full(len(Vs), -1, np.int64)
-    remap[used] = np.arange(len(used))
-    Vs, Fs = Vs[used], remap[Fs]
-    if len(Fs) > WINDING_MAX_FACES:  # cells smaller than the details of a low-poly body: fewer, larger triangles
-        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES)
-        if simpler is not None and not _touches_itself(*simpler):
-            Vs, Fs = simpler
-    return Vs, Fs
-
-
-def _is_closed(F: np.ndarray) -> bool:
-    """Every edge has exactly two faces, in opposite directions."""
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    directed = np.unique(E, axis=0)
-    if len(directed) != len(E):
-        return False
-    undirected, counts = np.unique(np.sort(E, axis=1), axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
-
-
-def _collapse_short_edges(V, F, values, tol):
-    """Merge the ends of edges shorter than ``tol``; drop the faces that vanish.
-
-    A face left with a repeated vertex is dropped, and so is a pair of faces
-    on the same three vertices (a collapsed sliver of volume).
-    """
-    for _ in range(3):
-        E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-        short = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) < tol
-        if not np.any(short):
-            break
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-
-        S = E[short]
-        k, label = connected_components(coo_matrix((np.ones(len(S)), (S[:, 0], S[:, 1])), shape=(len(V),) * 2),
-                                        directed=False)
-        count = np.bincount(label, minlength=k).astype(np.float64)[:, None]
-        Vn = np.zeros((k, 3))
-        np.add.at(Vn, label, V)
-        Wn = np.zeros((k, values.shape[1]))
-        np.add.at(Wn, label, values)
-        V, values, F = Vn / count, Wn / count, label[F]
-        F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
-        key = np.sort(F, axis=1)
-        _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-        F = F[cnt[inv.ravel()] == 1]
-        used = np.unique(F)
-        remap = np.full(len(V), -1, np.int64)
-        remap[used] = np.arange(len(used))
-        V, values, F = V[used], values[used], remap[F]
-    return V, F, values
-
-
-def _flip_caps(V, F, tol, rounds: int = 5):
-    """Flip the longest edge of each cap (a triangle flatter than ``tol``) with its neighbour's."""
-    F = F.copy()
-    for _ in range(rounds):
-        a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-        lengths = np.column_stack([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
-                                   np.linalg.norm(a - c, axis=1)])
-        height = np.linalg.norm(np.cross(b - a, c - a), axis=1) / np.maximum(lengths.max(1), 1e-300)
-        caps = np.flatnonzero(height < tol)
-        if len(caps) == 0:
-            break
-        owner = {}
-        for f, (x, y, z) in enumerate(F):
-            owner[(x, y)], owner[(y, z)], owner[(z, x)] = f, f, f
-        edges = {tuple(sorted(e)) for e in owner}
-        touched = set()
-        for f in caps:
-            if f in touched:
-                continue
-            k = int(np.argmax(lengths[f]))
-            p, q, r = (int(v) for v in np.roll(F[f], -k))  # longest edge p->q, r opposite
-            g = owner.get((q, p))
-            if g is None or g in touched:
-                continue
-            d = int(next(v for v in F[g] if v not in (p, q)))
-            if tuple(sorted((r, d))) in edges or r == d:
-                continue
-            F[f] = (p, d, r)
-            F[g] = (d, q, r)
-            edges.add(tuple(sorted((r, d))))
-            touched.update((f, g))
-    return F
 
 
 def _grouped(items: list[str]) -> str:
@@ -638,44 +374,3 @@ def _hull(points: np.ndarray):
     return None if solid.status() != manifold3d.Error.NoError or solid.is_empty() else solid
 
 
-def transfer_values(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Values at points from the closest point of a surface (barycentric interpolation).
-
-    Parameters
-    ----------
-    points : (p, 3) float64
-    vertices : (n, 3) float64
-    faces : (f, 3) int64
-    values : (n, k) float64
-
-    Returns
-    -------
-    out : (p, k) float64
-    """
-    import igl
-
-    P = np.ascontiguousarray(points, np.float64)
-    V = np.ascontiguousarray(vertices, np.float64)
-    F = np.ascontiguousarray(faces, np.int64)
-    _, I, C = igl.point_mesh_squared_distance(P, V, F)
-    I = np.asarray(I, np.int64).ravel()
-    C = np.asarray(C, np.float64)
-    tri = F[I]
-    bary = _barycentric(C, V[tri[:, 0]], V[tri[:, 1]], V[tri[:, 2]])
-    return np.einsum("pk,pkc->pc", bary, values[tri])
-
-
-def _barycentric(p, a, b, c) -> np.ndarray:
-    v0, v1, v2 = b - a, c - a, p - a
-    d00 = np.einsum("ij,ij->i", v0, v0)
-    d01 = np.einsum("ij,ij->i", v0, v1)
-    d11 = np.einsum("ij,ij->i", v1, v1)
-    d20 = np.einsum("ij,ij->i", v2, v0)
-    d21 = np.einsum("ij,ij->i", v2, v1)
-    den = d00 * d11 - d01 * d01
-    den = np.where(np.abs(den) > 1e-300, den, 1.0)
-    v = (d11 * d20 - d01 * d21) / den
-    w = (d00 * d21 - d01 * d20) / den
-    out = np.column_stack([1 - v - w, v, w])
-    out = np.clip(out, 0.0, None)
-    return out / np.maximum(out.sum(1, keepdims=True), 1e-300)
