@@ -47,8 +47,8 @@ from .prior import PosePrior
 from .relaxed import ArmDrops, without_drop
 from .standing import Standing
 
-__all__ = ["INFEASIBLE", "OVERHANG_MODELS", "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT",
-           "W_CHAIN", "W_OVERHANG", "W_PRIOR"]
+__all__ = ["CHAIN_LIMIT", "FOOTPRINT_MM2", "HEAD_LIMIT", "INFEASIBLE", "JOINT_LIMIT", "OVERHANG_MODELS", "Objective",
+           "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT", "W_CHAIN", "W_OVERHANG", "W_PRIOR"]
 
 #: Default weights of the normalised terms (see the module docstring).
 W_ARAP = 2.0
@@ -65,6 +65,31 @@ W_CONTACT = 5.0
 #: and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "The chain limit"): with the 60-degree chain
 #: limit, 0.03 gave zoo 65.2 % (65.7 % at 0), bunny 54.3 % (41.4 %), bb-bunny 44.3 % (41.4 %), smaller turns.
 W_CHAIN = 0.03
+
+#: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
+#: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
+#: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
+#: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
+JOINT_LIMIT = 45.0
+
+#: Default largest turn of a chain's end (a head, a hand, a tail or wing tip) in the world from its rest
+#: direction, degrees. Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md,
+#: "Zoo" and "The chain limit"): with the mirrored search, 60 degrees gave a zoo mean of 65.7 % (65.3 % with
+#: neither) and keeps the dragon's wings spread, the staff across the body and no head bent into a chest.
+CHAIN_LIMIT = 60.0
+
+#: Default largest turn of a head (:func:`supportless.search.naturalness.head_bones`) in the world from its rest
+#: direction, degrees: the chest, neck and head turns together. Tighter than :data:`CHAIN_LIMIT`, since a head
+#: is what a person reads first: a witch searched standing hung her head the chain limit's full 60 degrees
+#: (chest 23, neck and head 45) and her hat covered her face. 25 degrees is a chosen bound, not yet measured
+#: on the zoo.
+HEAD_LIMIT = 25.0
+
+#: Least first-layer contact of a turned print, mm² at the printed size
+#: (:attr:`~supportless.search.settings.SearchSettings.footprint_mm2`): the section half a first layer over its lowest point (:func:`supportless.energies.footprint.footprint_area`).
+#: A turn that rests on less is refused. Chosen on the zoo and the shared characters: see benchmarks/RESULTS.md,
+#: "Resting on an area".
+FOOTPRINT_MM2 = 3.0
 
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
 #: larger than any pose that keeps them can cost.
@@ -112,6 +137,15 @@ def distortion(terms: dict, w_arap: float, w_prior: float):
 class Objective:
     """Weighted sum of the normalised ARAP, overhang and self-intersection energies.
 
+    The defaults are the tool's (the named constants of this module, which
+    :class:`~supportless.search.settings.SearchSettings` takes too): ``Objective(rig)`` is
+    ``SearchSettings().objective(rig)`` but for the rules read from the rig's bone names, which the settings add
+    with their ``anatomy``, ``contact`` and ``relaxed`` on and this leaves out unless given: ``joint_ranges``,
+    ``contact``, ``drops``, and a named upper arm's wider ``joint_limits``
+    (:meth:`~supportless.search.settings.SearchSettings.joint_limits`). For a rig without named bones (a TGF
+    skeleton) that is no difference but ``contact``. Pass ``joint_limits=180.0, chain_limit=None,
+    head_limit=None, footprint_mm2=None, w_chain=0.0`` for an objective without the naturalness rules.
+
     Parameters
     ----------
     rig : Rig
@@ -142,6 +176,7 @@ class Objective:
     joint_limits : float or (m,) float64
         Largest rotation of each joint, degrees (one angle, see
         :mod:`supportless.search.prior`); a pose past a limit does not count.
+        Default :data:`JOINT_LIMIT`.
     keep_standing : bool
         A pose that touches the plate with a new part or falls over does not
         count (:class:`supportless.search.standing.Standing`).
@@ -154,7 +189,14 @@ class Objective:
     chain_limit, head_limit : float, optional
         Largest world turn from rest of a chain end (:func:`supportless.search.naturalness.chain_ends`) and of
         a head (:func:`supportless.search.naturalness.head_bones`), degrees: a pose past one does not count
-        (None: no such rule).
+        (None: no such rule). Default :data:`CHAIN_LIMIT` and :data:`HEAD_LIMIT`.
+    w_chain : float
+        Weight of the chain ends' squared world turn in the prior (:meth:`prior_cost`); default :data:`W_CHAIN`.
+    footprint_mm2 : float, optional
+        Least first-layer contact of a turned print, mm² at ``print_height_mm`` tall (:meth:`footprint_shortfall`);
+        default :data:`FOOTPRINT_MM2`, 0 or None: no such rule.
+    print_height_mm : float
+        The printed height of the rest pose, mm, for ``footprint_mm2``.
     volume : float, optional
         The volume the distortion and intersection terms are divided by
         (default: the rig's rest volume). A simplified proxy of a dense
@@ -170,10 +212,10 @@ class Objective:
                  w_intersect: float = W_INTERSECT, overhang_angle: float = SEARCH_OVERHANG_ANGLE,
                  overhang_model: str = "prism", clusters: int | None = 100, resolution: int = DEFAULT_RESOLUTION,
                  backend: str = "fast", arap_data: arap_mod.ArapData | None = None, w_prior: float = W_PRIOR,
-                 joint_limits=180.0, keep_standing: bool = True, support_floor: float = 0.0,
-                 volume: float | None = None, chain_limit: float | None = None, w_chain: float = 0.0,
+                 joint_limits=JOINT_LIMIT, keep_standing: bool = True, support_floor: float = 0.0,
+                 volume: float | None = None, chain_limit: float | None = CHAIN_LIMIT, w_chain: float = W_CHAIN,
                  joint_ranges: JointRanges | None = None, contact: ContactRules | None = None, drops: ArmDrops | None = None,
-                 head_limit: float | None = None, footprint_mm2: float | None = None,
+                 head_limit: float | None = HEAD_LIMIT, footprint_mm2: float | None = FOOTPRINT_MM2,
                  print_height_mm: float = REFERENCE_HEIGHT_MM):
         if overhang_model not in OVERHANG_MODELS:
             raise ValueError(f"overhang_model must be one of {OVERHANG_MODELS}, not {overhang_model!r}")

@@ -1,7 +1,9 @@
 """What a pose search is asked to do: one frozen settings object.
 
-:class:`SearchSettings` is the single source of the search's defaults, and
-:data:`RANGES` of the values each setting may take (the command line's and the
+:class:`SearchSettings` holds the search's defaults (those the objective takes too, the weights and the
+limits, are named in :mod:`supportless.search.objective`, whose
+:class:`~supportless.search.objective.Objective` defaults to them), and
+:data:`RANGES` the values each setting may take (the command line's and the
 browser app's limits too); the rule that turns the printer's overhang
 threshold into the one the search minimises is
 :func:`supportless.files.printer.search_angle`. It builds the
@@ -27,7 +29,8 @@ from ..rig.rig import Rig
 from ..rig.contact import ContactRules
 from .anatomy import bone_part, joint_ranges
 from .relaxed import arm_drops
-from .objective import OVERHANG_MODELS, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion
+from .objective import (CHAIN_LIMIT, FOOTPRINT_MM2, HEAD_LIMIT, JOINT_LIMIT, OVERHANG_MODELS, W_ARAP, W_CHAIN,
+                        W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion)
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
            "angle_layout", "bone_index", "resolve_fixed_bones"]
@@ -42,31 +45,6 @@ class _Auto:
 
 #: ``SearchSettings.replace(name=AUTO)`` sets ``name`` to ``None``: the value the tool chooses.
 AUTO = _Auto()
-
-#: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
-#: the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Zoo"): 45 degrees
-#: with prior weight 0.3 gave bunny 51.9 %, bb-bunny 48.4 %, zoo mean 63.9 %;
-#: 30 degrees with weight 1.0 gave 43.4 %, 35.3 % and lower zoo figures.
-JOINT_LIMIT = 45.0
-
-#: Default largest turn of a chain's end (a head, a hand, a tail or wing tip) in the world from its rest
-#: direction, degrees. Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md,
-#: "Zoo" and "The chain limit"): with the mirrored search, 60 degrees gave a zoo mean of 65.7 % (65.3 % with
-#: neither) and keeps the dragon's wings spread, the staff across the body and no head bent into a chest.
-CHAIN_LIMIT = 60.0
-
-#: Default largest turn of a head (:func:`supportless.search.naturalness.head_bones`) in the world from its rest
-#: direction, degrees: the chest, neck and head turns together. Tighter than :data:`CHAIN_LIMIT`, since a head
-#: is what a person reads first: a witch searched standing hung her head the chain limit's full 60 degrees
-#: (chest 23, neck and head 45) and her hat covered her face. 25 degrees is a chosen bound, not yet measured
-#: on the zoo.
-HEAD_LIMIT = 25.0
-
-#: Least first-layer contact of a turned print, mm² at the printed size (:attr:`SearchSettings.footprint_mm2`):
-#: the section half a first layer over its lowest point (:func:`supportless.energies.footprint.footprint_area`).
-#: A turn that rests on less is refused. Chosen on the zoo and the shared characters: see benchmarks/RESULTS.md,
-#: "Resting on an area".
-FOOTPRINT_MM2 = 3.0
 
 #: Least safety factor of an answer that is weaker than the rest pose as it stands (:attr:`SearchSettings.min_safety`):
 #: the strength of its weakest section over the stress of its own weight and a 2 N grip at one chain end

@@ -7,6 +7,9 @@ import supportless as sl
 from supportless.base.geometry import signed_volume
 from supportless.search.objective import INFEASIBLE
 
+#: The rules the objective's defaults (the tool's) add, left out: poses measured whatever their turns.
+LOOSE = dict(joint_limits=180.0, chain_limit=None, head_limit=None, footprint_mm2=None, w_chain=0.0)
+
 
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
@@ -173,7 +176,7 @@ def test_bounded_is_exact_below_the_bound_and_never_below_it_elsewhere(rig):
 def test_bounded_measures_each_term_only_where_the_cheaper_ones_leave_a_pose_below_its_bound(rig, monkeypatch):
     from supportless.search import objective as objective_mod
 
-    obj = sl.Objective(rig)
+    obj = sl.Objective(rig, **LOOSE)
     obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
     A = random_angles(rig, 60, scale=1.2, seed=5)
     raw = obj.raw_terms(A)
@@ -224,7 +227,7 @@ def test_the_self_intersection_is_measured_only_below_the_intersection_bound(rig
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
     from supportless.search import objective as objective_mod
 
-    obj = sl.Objective(rig)
+    obj = sl.Objective(rig, **LOOSE)
     A = random_angles(rig, 23, scale=0.8, seed=3)
     bound = np.where(np.arange(23) % 3 == 0, 0.0, np.inf)
     whole = obj.bounded(A, bound)
