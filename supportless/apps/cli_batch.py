@@ -10,6 +10,7 @@ import click
 from ..files.paths import check_output_paths
 from .cli_common import (
     EXIT_INTERRUPTED,
+    HEIGHT_MM,
     UP_HELP,
     _console,
     _fail,
@@ -29,7 +30,7 @@ __all__ = ["batch"]
               help="Folder for OUT/X/ per model (mesh to print, pose, report, pictures), summary.csv and "
                    "contact_sheet.png.")
 @click.option("--up", default="auto", show_default=True, help=UP_HELP)
-@click.option("--height-mm", type=click.FloatRange(min=0.01), default=None,
+@click.option("--height-mm", type=HEIGHT_MM, default=None,
               help="Print each model's rest pose this tall along --up, in millimetres [default: 60]; the STL "
                    "is +Z up, in millimetres, on the plate.")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None,

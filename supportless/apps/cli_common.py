@@ -16,7 +16,7 @@ import click
 
 from ..base.errors import InputError, SupportlessError
 from ..base.terminal import ClosableStdout, drop_stdout
-from ..files.printframe import REFERENCE_HEIGHT_MM
+from ..files.printframe import PRINT_HEIGHT_RANGE_MM, REFERENCE_HEIGHT_MM
 
 EXIT_USER_ERROR = 2
 #: Exit status when an output file could not be written (the others were).
@@ -81,6 +81,10 @@ def _say_frame(rig, frame, quiet=False) -> None:
         click.echo(f"supportless: warning: {rig.name}: {unusual}", err=True)
 
 
+#: The type of every command's ``--height-mm``: the printed heights :data:`~supportless.files.printframe.PRINT_HEIGHT_RANGE_MM`
+#: allows (the search settings' ``print_height_mm`` range too).
+HEIGHT_MM = click.FloatRange(*PRINT_HEIGHT_RANGE_MM)
+
 UP_HELP = ("Printing direction: x|y|z|-x|-y|-z, three numbers '0,1,0', or auto: the file format's convention "
            "(STL/3MF +Z; OBJ/OFF/PLY/glTF +Y), or the flat base the model was cut to stand on.")
 
@@ -93,7 +97,7 @@ def rig_options(f):
     f = click.option("--keep-units", is_flag=True,
                      help="Print the model at the file's own size, its units read as millimetres (glTF metres "
                           "become millimetres).")(f)
-    f = click.option("--height-mm", type=click.FloatRange(min=0.01, min_open=False), default=None,
+    f = click.option("--height-mm", type=HEIGHT_MM, default=None,
                      help=f"Print the rest pose this tall along --up, in millimetres [default: {REFERENCE_HEIGHT_MM:g}]. "
                           "Written files are +Z up, in millimetres, on the plate.")(f)
     f = click.option("--weights", type=click.Path(dir_okay=False), default=None,

@@ -7,7 +7,7 @@ import json
 import click
 
 from ..files.printframe import REFERENCE_HEIGHT_MM
-from .cli_common import UP_HELP, _fail, _slicer_setup, slicer_options
+from .cli_common import HEIGHT_MM, UP_HELP, _fail, _slicer_setup, slicer_options
 
 __all__ = ["slice_check_cmd"]
 
@@ -16,7 +16,7 @@ __all__ = ["slice_check_cmd"]
 @click.argument("original", type=click.Path(dir_okay=False))
 @click.argument("posed", type=click.Path(dir_okay=False))
 @click.option("--up", default="auto", show_default=True, help="Printing direction of ORIGINAL. " + UP_HELP)
-@click.option("--height-mm", default=REFERENCE_HEIGHT_MM, show_default=True, type=click.FloatRange(min=1.0),
+@click.option("--height-mm", default=REFERENCE_HEIGHT_MM, show_default=True, type=HEIGHT_MM,
               help="ORIGINAL is scaled to this height along --up.")
 @click.option("--posed-as", type=click.Choice(["written", "original"]), default="written", show_default=True,
               help="written: POSED is a print file (as `optimize -o` writes it: +Z up, millimetres) and is sliced "

@@ -23,11 +23,14 @@ import numpy as np
 
 from ..base.errors import InputError
 
-__all__ = ["BELIEVABLE_FILE_HEIGHT_MM", "REFERENCE_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
+__all__ = ["BELIEVABLE_FILE_HEIGHT_MM", "PRINT_HEIGHT_RANGE_MM", "REFERENCE_HEIGHT_MM", "USUAL_HEIGHT_MM", "PrintFrame", "place_vertices", "print_frame", "rig_print_frame",
            "rotation_to_z"]
 
 #: The printed height of a model's rest pose when the user gives none, mm: a figurine.
 REFERENCE_HEIGHT_MM = 60.0
+#: The printed heights a user may ask for, mm, ``(low, high)`` inclusive: the one bound of every command's
+#: ``--height-mm`` and of :data:`supportless.search.settings.RANGES` ``["print_height_mm"]``.
+PRINT_HEIGHT_RANGE_MM = (0.01, 100_000.0)
 #: Printed heights outside this range (mm) are unusual for a figure: the tool says so.
 USUAL_HEIGHT_MM = (10.0, 300.0)
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..base.errors import InputError
 from ..energies.raygrid import DEFAULT_RESOLUTION
-from ..files.printframe import REFERENCE_HEIGHT_MM
+from ..files.printframe import PRINT_HEIGHT_RANGE_MM, REFERENCE_HEIGHT_MM
 from ..files.printer import DEFAULT_OVERHANG_ANGLE, OVERHANG_MARGIN, search_angle
 from ..rig.rig import Rig
 from ..rig.contact import ContactRules
@@ -80,7 +80,7 @@ RANGES = {
     "head_limit": (0.0, 180.0),
     "footprint_mm2": (0.0, 10_000.0),
     "min_safety": (0.0, 100.0),
-    "print_height_mm": (0.01, 100_000.0),
+    "print_height_mm": PRINT_HEIGHT_RANGE_MM,
     "overhang_angle": (0.0, 90.0),
     "overhang_margin": (0.0, 45.0),
     "w_arap": (0.0, None),

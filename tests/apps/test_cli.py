@@ -600,3 +600,16 @@ def test_the_rest_guard_reads_the_slicer_and_the_prediction():
     assert sliced_worse({"slice_check": {"before": {"support_mm": 5.0}, "after": {"support_mm": 6.0}}})
     assert not sliced_worse({"slice_check": {"before": {"support_mm": 5.0}, "after": {"support_mm": 5.0}}})
     assert not sliced_worse({})
+
+
+def test_every_height_mm_option_takes_the_settings_print_height_range():
+    """--height-mm of every command is bounded by one range: the search settings' print_height_mm."""
+    from supportless.search.settings import RANGES
+
+    low, high = RANGES["print_height_mm"]
+    heights = {name: p for name, command in main.commands.items() for p in command.params if p.name == "height_mm"}
+    assert {"optimize", "prepare", "apply", "slice-check", "batch"} <= set(heights)
+    for name, param in heights.items():
+        assert (param.type.min, param.type.max, param.type.min_open, param.type.max_open) == (low, high, False, False), name
+    assert "0.01" in run("slice-check", "a.stl", "b.stl", "--height-mm", "0.001").output
+    assert "0.01" in run("optimize", "a.stl", "--height-mm", "0").output
