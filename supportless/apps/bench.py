@@ -29,6 +29,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..search.settings import SearchSettings
+
 __all__ = ["bench_model", "default_models", "random_poses", "run_bench", "timed_search"]
 
 #: Folder of the shared test models (``../shared/data`` beside the repository
@@ -79,7 +81,7 @@ def random_poses(rig, count: int, max_angle: float = 30.0, seed: int = 0) -> np.
     -------
     angles : (count, m, 3) float64
     """
-    from ..search.settings import SearchSettings, angle_layout
+    from ..search.settings import angle_layout
 
     free = angle_layout(rig, SearchSettings().fixed_bones(rig))
     rng = np.random.default_rng(seed)
@@ -113,14 +115,13 @@ def timed_search(rig, objective, settings) -> dict:
     return {"seconds": time.perf_counter() - t, "result": result, **result.stats}
 
 
-def bench_model(model, skeleton=None, up="auto", *, particles: int = 200, iterations: int = 120,
+def bench_model(model, skeleton=None, up="auto", *, particles: int = SearchSettings.particles, iterations: int = SearchSettings.iterations,
                 backend: str = "both", echo: Callable[[str], None] = print, repeat: int = 3) -> dict:
     """Time one model's stages on the chosen backends and print the table.
 
     Returns the measured times: ``{"rows": [(stage, {backend: seconds}, per_pose_count, note)], ...}``.
     """
     from ..rig.load import load_rig
-    from ..search.settings import SearchSettings
 
     backends = ["fast", "numpy"] if backend == "both" else [backend]
     with tempfile.TemporaryDirectory(prefix="supportless-bench-") as tmp:
@@ -193,7 +194,7 @@ def bench_model(model, skeleton=None, up="auto", *, particles: int = 200, iterat
                        for b, s in search_info.items()}}
 
 
-def run_bench(model=None, skeleton=None, up="auto", *, particles: int = 200, iterations: int = 120,
+def run_bench(model=None, skeleton=None, up="auto", *, particles: int = SearchSettings.particles, iterations: int = SearchSettings.iterations,
               backend: str = "both", echo: Callable[[str], None] = print) -> list[dict]:
     """Print the timing table of each model (see the module docstring).
 
@@ -205,7 +206,7 @@ def run_bench(model=None, skeleton=None, up="auto", *, particles: int = 200, ite
     skeleton : str, optional
     up : str
     particles, iterations : int
-        The swarm (the paper: 200 x 120).
+        The swarm (default: :class:`~supportless.search.settings.SearchSettings`', the paper's 200 x 120).
     backend : {"both", "fast", "numpy"}
     echo : callable(str)
 

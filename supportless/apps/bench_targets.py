@@ -272,12 +272,15 @@ def run_targets(cases=CASES, reference: bool = False, echo: Callable[[str], None
 
 def format_table(rows: list[dict]) -> str:
     """The rows as a Markdown table with the machine, the targets and the reference next to each case."""
+    from ..search.settings import SearchSettings
+
     def quality(r, p=""):
         return (f"{r[p + 'reduction']:.1f} % / {r[p + 'distortion']:.4f} / {r[p + 'value']:.4f} / "
                 f"{r[p + 'pairs']}")
 
     lines = [f"machine: {platform.machine()}, {os.cpu_count()} cores; load average before the run "
-             f"{os.getloadavg()[0]:.2f}; default search (200 × 120, orientation free); quality = support "
+             f"{os.getloadavg()[0]:.2f}; default search ({SearchSettings.particles} × {SearchSettings.iterations}, "
+             "orientation free); quality = support "
              "reduction (prism, rest → found) / distortion term / objective / exact intersecting pairs, on the full "
              "surface", "",
              "| case | triangles (searched) | bones (free) | prepare | search | peak memory | quality | "

@@ -17,6 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..base.interrupt import requested
+from .settings import SearchSettings
 
 __all__ = ["CMA_SHARE", "OPTIMIZERS", "OptimizerResult", "evolution_strategy", "particle_swarm"]
 
@@ -54,7 +55,7 @@ class OptimizerResult:
 
 
 def particle_swarm(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray, *,
-                   particles: int = 200, iterations: int = 120, rng: np.random.Generator | None = None,
+                   particles: int = SearchSettings.particles, iterations: int = SearchSettings.iterations, rng: np.random.Generator | None = None,
                    inertia: float = 0.7298, cognitive: float = 1.49618, social: float = 1.49618,
                    initial: np.ndarray | None = None,
                    callback: Callable[[int, np.ndarray, float], bool | None] | None = None,
@@ -154,7 +155,7 @@ CMA_SHARE = 5
 
 
 def evolution_strategy(f: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray, *,
-                       particles: int = 200, iterations: int = 120, rng: np.random.Generator | None = None,
+                       particles: int = SearchSettings.particles, iterations: int = SearchSettings.iterations, rng: np.random.Generator | None = None,
                        initial: np.ndarray | None = None, sigma: float = 0.1,
                        callback: Callable[[int, np.ndarray, float], bool | None] | None = None,
                        feasible: Callable[[np.ndarray], bool] | None = None,

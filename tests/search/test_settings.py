@@ -112,3 +112,16 @@ def test_replace_keeps_a_setting_on_none_and_resets_it_on_auto():
     assert s.replace(particles=7).particles == 7
     with pytest.raises(sl.InputError, match="particles must be within 2..5000"):
         s.replace(particles=1)
+
+
+def test_the_swarm_and_the_bench_default_to_the_settings_swarm():
+    """One source of the default swarm: the optimisers' and the bench's defaults are SearchSettings'."""
+    import inspect
+
+    from supportless.apps.bench import bench_model, run_bench
+    from supportless.search.swarm import evolution_strategy, particle_swarm
+
+    d = sl.SearchSettings()
+    for f in (particle_swarm, evolution_strategy, bench_model, run_bench):
+        params = inspect.signature(f).parameters
+        assert (params["particles"].default, params["iterations"].default) == (d.particles, d.iterations), f
