@@ -32,17 +32,32 @@ from pathlib import Path
 from ..base.errors import InputError
 
 __all__ = ["CURA_DEFAULTS", "CURA_SUPPORT_ANGLE", "DEFAULT_DENSITY", "DEFAULT_OVERHANG_ANGLE", "FILAMENT_DIAMETER_MM", "MAX_SEARCH_ANGLE", "OVERHANG_MARGIN",
-           "PRUSA_DEFAULTS", "PrinterProfile", "SEARCH_OVERHANG_ANGLE", "default_profile", "mm_to_cm3",
-           "cura_default_profile", "overhang_threshold", "read_cura_profile", "read_printer_profile", "search_angle"]
+           "PRUSA_DEFAULTS", "PRUSA_PRESET_KEYS", "PrinterProfile", "SEARCH_OVERHANG_ANGLE", "default_profile", "mm_to_cm3",
+           "cura_default_profile", "overhang_threshold", "prusa_default_config", "read_cura_profile", "read_printer_profile", "search_angle"]
 
-#: PrusaSlicer's built-in defaults of the keys this tool reads (PrusaSlicer
-#: 2.5, no vendor preset): what a profile that lacks a key means.
+#: PrusaSlicer's built-in defaults (PrusaSlicer 2.5, no vendor preset), keys as a config file spells them: the one
+#: table of them. Of the keys this tool reads, what a profile that lacks one means; the keys of
+#: :data:`PRUSA_PRESET_KEYS` are the slicer's ``prusa-defaults`` preset
+#: (:data:`supportless.slicing.prusaslicer.PRUSA_DEFAULTS_CONFIG`), which gives the reference figures.
 PRUSA_DEFAULTS: dict[str, str] = {
+    "printer_technology": "FFF",
+    "gcode_flavor": "reprap",
     "layer_height": "0.3",
     "first_layer_height": "0.35",
     "nozzle_diameter": "0.4",
     "filament_diameter": "1.75",
     "filament_density": "0",
+    "temperature": "200",
+    "first_layer_temperature": "200",
+    "bed_temperature": "0",
+    "first_layer_bed_temperature": "0",
+    "perimeters": "3",
+    "top_solid_layers": "3",
+    "bottom_solid_layers": "3",
+    "fill_density": "20%",
+    "fill_pattern": "stars",
+    "skirts": "1",
+    "brim_width": "0",
     "support_material_threshold": "0",
     "external_perimeter_extrusion_width": "0",
     "extrusion_width": "0",
@@ -51,6 +66,21 @@ PRUSA_DEFAULTS: dict[str, str] = {
     "support_material_buildplate_only": "0",
     "support_material_spacing": "2.5",
 }
+
+#: The keys of :data:`PRUSA_DEFAULTS` the slicer bridge passes to PrusaSlicer, in this order, for its
+#: ``prusa-defaults`` preset (0.3 mm layers, 3 perimeters, 20 % stars infill, one skirt loop, the automatic
+#: overhang threshold): :func:`prusa_default_config`.
+PRUSA_PRESET_KEYS: tuple[str, ...] = (
+    "printer_technology", "gcode_flavor", "nozzle_diameter", "filament_diameter", "temperature",
+    "first_layer_temperature", "bed_temperature", "first_layer_bed_temperature", "layer_height", "first_layer_height",
+    "perimeters", "top_solid_layers", "bottom_solid_layers", "fill_density", "fill_pattern", "skirts", "brim_width",
+    "support_material_threshold",
+)
+
+
+def prusa_default_config() -> dict[str, str]:
+    """PrusaSlicer's defaults of :data:`PRUSA_PRESET_KEYS` as its command line spells them (``layer-height``)."""
+    return {key.replace("_", "-"): PRUSA_DEFAULTS[key] for key in PRUSA_PRESET_KEYS}
 
 #: ``fdmprinter.def.json``'s defaults of the Cura settings this tool reads (Cura 4.13), but the filament,
 #: 1.75 mm as the tool slices with (:data:`supportless.slicing.cura.CURA_SETTINGS`).

@@ -41,7 +41,7 @@ import numpy as np
 from ..base.errors import InputError, SlicerError
 from ..base.scratch import scratch_dir
 from ..files.meshes import check_mesh_arrays, read_mesh
-from ..files.printer import DEFAULT_DENSITY, PrinterProfile
+from ..files.printer import DEFAULT_DENSITY, PrinterProfile, prusa_default_config
 from ..files.printframe import REFERENCE_HEIGHT_MM, place_vertices, rotation_to_z
 from ..report.report import reduction
 from .cura import cura_version
@@ -58,7 +58,7 @@ from .jobs import build_volume, mesh_jobs, run_jobs
 
 __all__ = [
     "DEFAULT_CONFIG", "DEFAULT_PRESET", "ENV_VAR", "FAST_CONFIG", "FILAMENT_DIAMETER_MM", "PRESETS",
-    "PRUSA_DEFAULTS_CONFIG", "SUPPORT_OPTIONS", "SliceReport", "SlicerError", "SlicerNotFound", "SupportSlices",
+    "PRUSA_DEFAULTS_CONFIG", "STANDARD_CONFIG", "SUPPORT_OPTIONS", "SliceReport", "SlicerError", "SlicerNotFound", "SupportSlices",
     "find_prusa_slicer", "mm_to_cm3", "parse_filament_used", "parse_print_time", "place_vertices", "rotation_to_z",
     "scale_for_height", "slice_check", "slice_support",
 ]
@@ -66,10 +66,10 @@ __all__ = [
 ENV_VAR = "SUPPORTLESS_PRUSA_SLICER"
 DEFAULT_TIMEOUT_S = 300.0
 
-#: Generic PLA profile: 0.4 mm nozzle, 0.2 mm layers, 2 perimeters, 15 % infill,
-#: no skirt or brim, and the 45-degree rule (``support-material-threshold`` is
-#: the most horizontal slope, from the horizontal, that prints unsupported).
-DEFAULT_CONFIG: dict[str, str] = {
+#: The ``standard`` preset, a generic PLA profile (not the default, :data:`DEFAULT_PRESET`): 0.4 mm nozzle,
+#: 0.2 mm layers, 2 perimeters, 15 % infill, no skirt or brim, and the 45-degree rule
+#: (``support-material-threshold`` is the most horizontal slope, from the horizontal, that prints unsupported).
+STANDARD_CONFIG: dict[str, str] = {
     "printer-technology": "FFF", "gcode-flavor": "marlin2", "nozzle-diameter": "0.4",
     "filament-diameter": str(FILAMENT_DIAMETER_MM), "filament-type": "PLA", "filament-density": "1.24",
     "temperature": "215", "first-layer-temperature": "215", "bed-temperature": "60", "first-layer-bed-temperature": "60",
@@ -80,32 +80,29 @@ DEFAULT_CONFIG: dict[str, str] = {
 
 #: Coarser, faster settings for tests (0.3 mm layers, 1 perimeter, 10 % infill).
 FAST_CONFIG: dict[str, str] = {
-    **DEFAULT_CONFIG, "layer-height": "0.3", "first-layer-height": "0.3", "perimeters": "1", "top-solid-layers": "2",
+    **STANDARD_CONFIG, "layer-height": "0.3", "first-layer-height": "0.3", "perimeters": "1", "top-solid-layers": "2",
     "bottom-solid-layers": "2", "fill-density": "10%", "fill-pattern": "rectilinear",
 }
 
 #: PrusaSlicer 2.5's built-in defaults spelled out (0.3 mm layers, 3 perimeters,
-#: 20 % stars infill, one skirt loop, automatic overhang threshold). They give
-#: the reference figure exactly (upright bunny, 60 mm: 3360 mm of support,
+#: 20 % stars infill, one skirt loop, automatic overhang threshold), from the one table of them,
+#: :data:`supportless.files.printer.PRUSA_DEFAULTS` (:func:`~supportless.files.printer.prusa_default_config`).
+#: They give the reference figure exactly (upright bunny, 60 mm: 3360 mm of support,
 #: the skirt around the supports included).
-PRUSA_DEFAULTS_CONFIG: dict[str, str] = {
-    "printer-technology": "FFF", "gcode-flavor": "reprap", "nozzle-diameter": "0.4",
-    "filament-diameter": str(FILAMENT_DIAMETER_MM),
-    "temperature": "200", "first-layer-temperature": "200", "bed-temperature": "0", "first-layer-bed-temperature": "0",
-    "layer-height": "0.3", "first-layer-height": "0.35", "perimeters": "3", "top-solid-layers": "3",
-    "bottom-solid-layers": "3", "fill-density": "20%", "fill-pattern": "stars", "skirts": "1", "brim-width": "0",
-    "support-material-threshold": "0",
-}
+PRUSA_DEFAULTS_CONFIG: dict[str, str] = prusa_default_config()
 
 #: Named configs accepted by ``slice_check(config=...)``.
 PRESETS: dict[str, dict[str, str]] = {
-    "standard": DEFAULT_CONFIG,
+    "standard": STANDARD_CONFIG,
     "fast": FAST_CONFIG,
     "prusa-defaults": PRUSA_DEFAULTS_CONFIG,
 }
 
 #: The preset used when no config is given: matches the reference figures.
 DEFAULT_PRESET = "prusa-defaults"
+
+#: The config used when none is given: the :data:`DEFAULT_PRESET`'s (PrusaSlicer's own defaults).
+DEFAULT_CONFIG: dict[str, str] = PRESETS[DEFAULT_PRESET]
 
 #: Extra flags of the "with supports" slice.
 SUPPORT_OPTIONS: tuple[str, ...] = ("--support-material", "--support-material-auto")

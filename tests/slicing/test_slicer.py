@@ -153,7 +153,7 @@ def test_report_to_dict_is_json_ready():
         total_mm_after=1025.0,
         model_mm_before=1000.0,
         model_mm_after=1000.0,
-        config=dict(sl.DEFAULT_CONFIG),
+        config=dict(sl.STANDARD_CONFIG),
     )
     r.total_cm3_after = float("nan")
     d = r.to_dict()
@@ -167,14 +167,29 @@ def test_report_to_dict_is_json_ready():
     assert d["config"]["support-material-threshold"] == "45"
 
 
-def test_default_config_is_explicit():
-    cfg = sl.DEFAULT_CONFIG
+def test_standard_config_is_explicit():
+    cfg = sl.STANDARD_CONFIG
     assert cfg["layer-height"] == "0.2"
     assert cfg["perimeters"] == "2"
     assert cfg["fill-density"] == "15%"
     assert cfg["support-material-threshold"] == "45"
     assert cfg["filament-diameter"] == "1.75"
     assert sl.SUPPORT_OPTIONS == ("--support-material", "--support-material-auto")
+
+
+
+def test_the_default_config_is_prusaslicers_defaults_from_the_one_table():
+    """DEFAULT_CONFIG is the default preset's; its values are files/printer's PRUSA_DEFAULTS, which profiles read."""
+    from supportless.files.printer import PRUSA_DEFAULTS, default_profile
+
+    assert sl.DEFAULT_CONFIG is sl.PRESETS[sl.DEFAULT_PRESET] is sl.PRUSA_DEFAULTS_CONFIG
+    assert sl.PRESETS["standard"] is sl.STANDARD_CONFIG and sl.STANDARD_CONFIG["support-material-threshold"] == "45"
+    for key, value in sl.PRUSA_DEFAULTS_CONFIG.items():
+        assert PRUSA_DEFAULTS[key.replace("-", "_")] == value, key
+    profile = default_profile()
+    assert (profile.layer_height, profile.first_layer_height, profile.support_threshold) == (
+        float(sl.DEFAULT_CONFIG["layer-height"]), float(sl.DEFAULT_CONFIG["first-layer-height"]),
+        float(sl.DEFAULT_CONFIG["support-material-threshold"]))
 
 
 # --- finding the slicer and error handling, with fake executables ----------
