@@ -38,7 +38,7 @@ from .materials import DEFAULT_MATERIAL, MATERIALS, Material, effective_strength
 from .sections import LayerSections, group_by, layer_sections, mesh_edges, outline_around, plane_frame
 
 __all__ = ["BONE_SAMPLES", "CHAIN_REACH", "GRAVITY", "HANDLING_LOAD_N", "HELD_SHARE", "MAX_PLANES", "Section",
-           "Strength", "analyse_strength", "chain_ends", "grip_stress"]
+           "Strength", "analyse_strength", "chain_ends", "grip_points", "grip_stress"]
 
 #: The handling load at a chain end (a hand, the head, a tail), N: about the force of two fingers holding it.
 HANDLING_LOAD_N = 2.0
@@ -216,6 +216,31 @@ def chain_ends(joints: np.ndarray, bones: np.ndarray, reach: float) -> np.ndarra
     return np.array(sorted(ends), np.int64)
 
 
+def grip_points(joints: np.ndarray, bones: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Where each chain end is gripped: a branching joint (a hand of fingers) at itself, a leaf (a paw, an ear,
+    the top of a head) halfway along its bone: fingers hold a part, not its very tip, where a tapering limb is
+    thinnest.
+
+    Parameters
+    ----------
+    joints : (j, 3) float64
+    bones : (m, 2) int64
+    ends : (e,) int64
+
+    Returns
+    -------
+    points : (e, 3) float64
+    """
+    B = np.asarray(bones, np.int64)
+    degree = np.bincount(B.ravel(), minlength=len(joints))
+    points = np.asarray(joints, np.float64)[ends].copy()
+    for k, j in enumerate(ends):
+        if degree[j] == 1:
+            a, b = B[np.flatnonzero((B == j).any(axis=1))[0]]
+            points[k] = 0.5 * (joints[a] + joints[b])
+    return points
+
+
 def _face_bones(vertices, faces, joints, bones):
     """(f,) int64: the bone nearest each face's centroid (when no skinning weights are given)."""
     c = vertices[faces].mean(axis=1)
@@ -301,6 +326,7 @@ def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray
     height = z1 - z0
     size = float(np.ptp(V, axis=0).max())  # the figure's size, however it lies
     ends = chain_ends(Jt, B, CHAIN_REACH * size) if ends is None else np.asarray(ends, np.int64)
+    grips = grip_points(Jt, B, ends)
     weight_per_mm3 = mat.density * GRAVITY * 1e-6  # N/mm³
     face_safety = np.full(len(F), np.inf)
     sections = []
@@ -308,9 +334,9 @@ def analyse_strength(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray
     spacing = max(float(layer_mm), height / max(int(max_planes), 1))
     planes = np.arange(z0 + held, z1, spacing)
     if len(planes):
-        sections += _layer_verdicts(V, layer_sections(V, F, planes), labels, ends, Jt[ends], mat,
+        sections += _layer_verdicts(V, layer_sections(V, F, planes), labels, ends, grips, mat,
                                     weight_per_mm3, load_n)
-    sections += _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, z0 + held)
+    sections += _bone_verdicts(V, F, Jt, B, labels, ends, grips, mat, weight_per_mm3, load_n, z0 + held)
     sections.sort(key=lambda s: s.safety_factor)
     for s in sections:
         face_safety[s.faces] = np.minimum(face_safety[s.faces], s.safety_factor)
@@ -498,7 +524,7 @@ def _hangs_free(V, F, edges, faces, origin, normal, held_below) -> bool:
     return not bool(np.any(reached & beyond & (V[:, 2] < held_below)))
 
 
-def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_below):
+def _bone_verdicts(V, F, Jt, B, labels, ends, grip_at, mat, weight_per_mm3, load_n, held_below):
     """Every bone section's :class:`Section`: cut square to the bones whose far side from the plate is free."""
     m = len(B)
     held_bones = set(np.unique(labels[V[F][:, :, 2].min(axis=1) < held_below]).tolist())
@@ -576,7 +602,8 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, mat, weight_per_mm3, load_n, held_
             local = lambda v: basis @ v  # noqa: E731 - world to (e1, e2, n)
             weight = local(np.array([0.0, 0.0, -weight_per_mm3 * vol])) if vol > 0 else None
             lever = local(mom / vol - centroid) if vol > 0 else np.zeros(3)
-            gl = [(int(ends[e]), 1.0, local(Jt[ends[e]] - centroid)) for e in gripped]
+            gl = [(int(ends[e]), 1.0, local(grip_at[e] - centroid)) for e in gripped
+                  if (grip_at[e] - origin) @ n > 0]  # a grip nearer the plate than the section does not load it
             strength = float(effective_strength(mat, n[2]))
             safety, stress, breaks, end, grip = _verdict(pts, area, J2, 1.0, weight, lever, gl, strength, load_n)
             across = mostly_across(mat, n[2])

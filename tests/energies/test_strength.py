@@ -65,8 +65,8 @@ def test_section_moments_match_sampling_of_a_triangle():
 
 def test_a_vertical_cantilever_is_bent_as_beam_theory_says():
     m = box((4, 4, 40), (0, 0, 20))
-    J = np.array([[0, 0, 0], [0, 0, 40.0]])
-    s = analyse_strength(m.vertices, m.faces, J, np.array([[0, 1]]), material=WEIGHTLESS, held_mm=1.0)
+    J = np.array([[0, 0, 0], [0, 0, 30.0], [0, 0, 50.0]])  # the leaf bone's middle, where it is gripped: the top
+    s = analyse_strength(m.vertices, m.faces, J, np.array([[0, 1], [1, 2]]), material=WEIGHTLESS, held_mm=1.0)
     layers = [x for x in s.sections if x.kind == "layer"]
     for x in layers[::25]:
         assert x.across and x.stress_mpa == pytest.approx(square_grip(40.0 - x.height_mm, 4.0), rel=1e-6)
@@ -86,8 +86,8 @@ def test_its_own_weight_compresses_a_column():
 
 def test_a_horizontal_cantilever_is_bent_along_its_layers():
     m = union(box((4, 4, 20), (0, 0, 10)), box((32, 4, 4), (16, 0, 18)))
-    J = np.array([[0, 0, 0], [0, 0, 18.0], [32, 0, 18]])
-    s = analyse_strength(m.vertices, m.faces, J, np.array([[0, 1], [1, 2]]), material=WEIGHTLESS)
+    J = np.array([[0, 0, 0], [0, 0, 18.0], [28, 0, 18], [36, 0, 18]])  # gripped at (32, 0, 18), the tip
+    s = analyse_strength(m.vertices, m.faces, J, np.array([[0, 1], [1, 2], [2, 3]]), material=WEIGHTLESS)
     beam = [x for x in s.sections if x.kind == "bone" and x.bone == 1]
     assert len(beam) == 3
     for x in beam:
@@ -99,7 +99,7 @@ def test_a_horizontal_cantilever_is_bent_along_its_layers():
 def test_two_posts_in_one_layer_each_carry_their_own_grip():
     """A U: two posts of different sections on a base; the grip at each post's top is carried by that post."""
     m = union(box((30, 6, 4), (0, 0, 2)), box((4, 4, 30), (-12, 0, 19)), box((2, 2, 30), (12, 0, 19)))
-    J = np.array([[0, 0, 2.0], [-12, 0, 2], [-12, 0, 34], [12, 0, 2], [12, 0, 34]])
+    J = np.array([[0, 0, 2.0], [-12, 0, 2], [-12, 0, 66], [12, 0, 2], [12, 0, 66]])  # gripped at the tops
     B = np.array([[0, 1], [1, 2], [0, 3], [3, 4]])
     s = analyse_strength(m.vertices, m.faces, J, B, material=WEIGHTLESS, held_mm=2.0)
     layers = [x for x in s.sections if x.kind == "layer"]
@@ -117,7 +117,7 @@ def test_two_posts_in_one_layer_each_carry_their_own_grip():
 def test_a_part_with_nothing_above_it_carries_no_load():
     """The U's right post without a chain end, and no weight: nothing loads its sections."""
     m = union(box((30, 6, 4), (0, 0, 2)), box((4, 4, 30), (-12, 0, 19)), box((2, 2, 30), (12, 0, 19)))
-    J = np.array([[0, 0, 2.0], [-12, 0, 2], [-12, 0, 34], [12, 0, 2], [12, 0, 34]])
+    J = np.array([[0, 0, 2.0], [-12, 0, 2], [-12, 0, 66], [12, 0, 2], [12, 0, 66]])  # gripped at the tops
     B = np.array([[0, 1], [1, 2], [0, 3], [3, 4]])
     s = analyse_strength(m.vertices, m.faces, J, B, material=WEIGHTLESS, held_mm=2.0, ends=np.array([2]))
     right = [x for x in s.sections if x.kind == "layer" and x.centre[0] > 6 and x.height_mm > 5]
@@ -183,6 +183,14 @@ def test_fingers_are_gripped_at_the_hand_and_a_long_tail_at_its_tip():
     assert ends.tolist() == [1, tail0 + 2]
 
 
+def test_a_leaf_is_gripped_halfway_along_its_bone_and_a_branch_at_itself():
+    from supportless.energies.strength import grip_points
+
+    joints = np.array([[0, 0, 0], [0, 0, 10.0], [0, 0, 14.0], [3, 0, 10]])
+    bones = np.array([[0, 1], [1, 2], [1, 3]])
+    assert grip_points(joints, bones, np.array([2, 1])).tolist() == [[0, 0, 12.0], [0, 0, 10.0]]
+
+
 def test_strength_across_and_along_the_layers():
     assert effective_strength(PLA, 1.0) == pytest.approx(PLA.across_mpa)
     assert effective_strength(PLA, 0.0) == pytest.approx(PLA.along_mpa)
@@ -200,8 +208,8 @@ def test_the_profiles_filament_is_the_material():
 def test_the_worst_grip_on_a_square_column_pulls_along_a_diagonal():
     """Its corner fibre is stretched most by a grip across the diagonal, tilted up by the axial share."""
     m = box((4, 4, 40), (0, 0, 20))
-    s = analyse_strength(m.vertices, m.faces, np.array([[0, 0, 0], [0, 0, 40.0]]), np.array([[0, 1]]),
-                         material=WEIGHTLESS, held_mm=1.0)
+    s = analyse_strength(m.vertices, m.faces, np.array([[0, 0, 0], [0, 0, 30.0], [0, 0, 50.0]]),
+                         np.array([[0, 1], [1, 2]]), material=WEIGHTLESS, held_mm=1.0)
     u = s.weakest.grip
     assert np.linalg.norm(u) == pytest.approx(1.0)
     assert abs(u[0]) == pytest.approx(abs(u[1]), rel=1e-6) and abs(u[2]) < 0.05
