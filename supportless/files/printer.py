@@ -20,6 +20,11 @@ Extrusion widths follow PrusaSlicer's rules: 0 means automatic (1.125 x the
 nozzle for external perimeters, 1.05 x for other lines) or the general
 ``extrusion_width`` when that is set, and a percentage is of the nozzle
 diameter.
+
+:func:`reduction` (a percentage less, rest -> found) and :func:`slicer_label`
+(which slicer measured) are what a slicer's report and the JSON report both
+say: they live here, below both, so choosing a slice never loads
+:mod:`supportless.report` (and its matplotlib).
 """
 
 from __future__ import annotations
@@ -33,7 +38,8 @@ from ..base.errors import InputError
 
 __all__ = ["CURA_DEFAULTS", "CURA_SUPPORT_ANGLE", "DEFAULT_DENSITY", "DEFAULT_OVERHANG_ANGLE", "FILAMENT_DIAMETER_MM", "MAX_SEARCH_ANGLE", "OVERHANG_MARGIN",
            "PRUSA_DEFAULTS", "PRUSA_PRESET_KEYS", "PrinterProfile", "SEARCH_OVERHANG_ANGLE", "default_profile", "mm_to_cm3",
-           "cura_default_profile", "overhang_threshold", "prusa_default_config", "read_cura_profile", "read_printer_profile", "search_angle"]
+           "cura_default_profile", "overhang_threshold", "prusa_default_config", "read_cura_profile", "read_printer_profile", "reduction",
+           "search_angle", "slicer_label"]
 
 #: PrusaSlicer's built-in defaults (PrusaSlicer 2.5, no vendor preset), keys as a config file spells them: the one
 #: table of them. Of the keys this tool reads, what a profile that lacks one means; the keys of
@@ -387,6 +393,29 @@ def mm_to_cm3(mm: float, diameter_mm: float = FILAMENT_DIAMETER_MM) -> float:
         ``mm * pi * (diameter_mm / 2)**2 / 1000``.
     """
     return mm * math.pi * (diameter_mm / 2.0) ** 2 / 1000.0
+
+
+def reduction(before: float, after: float) -> float | None:
+    """Percentage reduction ``100 (1 - after / before)``.
+
+    Parameters
+    ----------
+    before, after : float
+        A quantity (support volume, filament length, ...) before and after.
+
+    Returns
+    -------
+    percent : float or None
+        Positive when ``after`` is smaller; None when ``before`` is not positive.
+    """
+    return None if before <= 0 else 100.0 * (1.0 - after / before)
+
+
+def slicer_label(sliced: dict) -> str:
+    """``PrusaSlicer``, ``Cura`` or ``Cura, tree supports``: who measured a ``slice_check`` report."""
+    if sliced.get("engine", "prusa") == "prusa":
+        return "PrusaSlicer"
+    return "Cura, tree supports" if sliced.get("support") == "tree" else "Cura"
 
 
 # --------------------------------------------------------------------------- #

@@ -25,7 +25,7 @@ from ..energies.intersection import self_intersection_volume
 from ..energies.overhang import overhang_energy, risky_area, risky_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
-from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3
+from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3, reduction, slicer_label
 from ..energies.footprint import footprint_area
 from ..energies.materials import MATERIALS
 from ..energies.strength import HANDLING_LOAD_N, Strength
@@ -103,22 +103,6 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
     if exact:
         out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
     return out
-
-
-def reduction(before: float, after: float) -> float | None:
-    """Percentage reduction ``100 (1 - after / before)``.
-
-    Parameters
-    ----------
-    before, after : float
-        A quantity (support volume, filament length, ...) before and after.
-
-    Returns
-    -------
-    percent : float or None
-        Positive when ``after`` is smaller; None when ``before`` is not positive.
-    """
-    return None if before <= 0 else 100.0 * (1.0 - after / before)
 
 
 #: The printed height the report's predicted slicer filament is for when no print frame is given, mm.
@@ -457,13 +441,6 @@ def support_headline(report: dict) -> dict | None:
     out["reduction_percent"] = reduction(out["before_mm"], out["after_mm"])
     out["line"] = _headline_text(out)
     return out
-
-
-def slicer_label(sliced: dict) -> str:
-    """``PrusaSlicer``, ``Cura`` or ``Cura, tree supports``: who measured a ``slice_check`` report."""
-    if sliced.get("engine", "prusa") == "prusa":
-        return "PrusaSlicer"
-    return "Cura, tree supports" if sliced.get("support") == "tree" else "Cura"
 
 
 def _headline_text(h: dict) -> str:

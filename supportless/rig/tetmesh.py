@@ -3,9 +3,9 @@
 TetGen (AGPL) is reached through :mod:`supportless.copyleft.tetgen`; when it
 cannot mesh a surface (real characters' shells cut each other), fTetWild
 (``pytetwild``, MPL-2.0) meshes it within a small envelope. Both run in a
-child process, so a crash of either is a message. Every call to Shewchuk's
-Triangle (free for non-commercial use only, reached through ``igl.triangle``)
-lives in this module and nowhere else.
+child process, so a crash of either is a message. Shewchuk's Triangle (free
+for non-commercial use only) is called in :mod:`supportless.copyleft.triangle`
+only; :func:`triangulate_planar` is importable here as before.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 from ..base.errors import InputError
 from ..base.isolated import NativeFailure, run_isolated
 from ..copyleft.tetgen import tetgen_surface, tetgen_with_skeleton
+from ..copyleft.triangle import triangulate_planar  # noqa: F401 (re-exported)
 
 __all__ = ["FTETWILD_EDGE", "FTETWILD_ENVELOPE", "bone_samples", "ftetwild_volume", "refine_triangulation_with_points",
            "tetrahedralize_surface", "tetrahedralize_with_skeleton", "tetrahedralize_with_skeleton_or_remake",
@@ -330,30 +331,3 @@ def bone_samples(joints: np.ndarray, bones: np.ndarray, samples_per_bone: int) -
     a, b = joints[bones[:, 0]], joints[bones[:, 1]]
     inner = (a[:, None, :] * (1 - t)[None, :, None] + b[:, None, :] * t[None, :, None]).reshape(-1, joints.shape[1])
     return np.concatenate([joints, inner])
-
-
-def triangulate_planar(points: np.ndarray, segments: np.ndarray, max_area: float,
-                       min_angle: float = 28.0) -> tuple[np.ndarray, np.ndarray]:
-    """Quality triangulation of a planar straight-line graph (Triangle).
-
-    Parameters
-    ----------
-    points : (k, 2) float64
-        Outline and interior points; all are kept as vertices.
-    segments : (s, 2) int64
-        Edges that must appear (the outline, the bones), not split.
-    max_area : float
-        Largest triangle area.
-    min_angle : float
-        Smallest angle in degrees.
-
-    Returns
-    -------
-    vertices : (n, 2) float64
-    faces : (f, 3) int64
-    """
-    import igl.triangle
-
-    V, F, _, _, _ = igl.triangle.triangulate(np.asarray(points, np.float64), np.asarray(segments, np.int64),
-                                             flags=f"pq{min_angle:g}a{max_area:g}YQ")
-    return np.asarray(V, np.float64), np.asarray(F, np.int64)

@@ -3,7 +3,7 @@
 ``tpose`` and ``branch`` are smooth unions of capsules and ellipsoids meshed
 with :func:`~supportless.shapes.sdf.mesh_from_sdf`; ``woody2d`` is a
 constrained quality triangulation (Shewchuk's Triangle, through
-:func:`supportless.rig.tetmesh.triangulate_planar`) of a stick-figure outline built
+:func:`supportless.copyleft.triangle.triangulate_planar`) of a stick-figure outline built
 with :class:`manifold3d.CrossSection`, with vertices exactly at every joint and
 at samples along every bone.
 """
@@ -142,7 +142,7 @@ def woody2d(samples_per_bone=5, max_area=1.5):
     """
     import manifold3d
 
-    from ..rig.tetmesh import triangulate_planar
+    from ..copyleft.triangle import triangulate_planar
 
     joints = np.array([
         [0.0, 30.0],    # 0 hips (root)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..base.errors import InputError
-from ..report.report import slicer_label
+from ..files.printer import slicer_label
 
 __all__ = ["ENGINES", "SUPPORTS", "SlicerChoice", "choose_slicer"]
 

@@ -41,9 +41,8 @@ import numpy as np
 from ..base.errors import InputError, SlicerError
 from ..base.scratch import scratch_dir
 from ..files.meshes import check_mesh_arrays, read_mesh
-from ..files.printer import DEFAULT_DENSITY, PrinterProfile, prusa_default_config
+from ..files.printer import DEFAULT_DENSITY, PrinterProfile, prusa_default_config, reduction
 from ..files.printframe import REFERENCE_HEIGHT_MM, place_vertices, rotation_to_z
-from ..report.report import reduction
 from .cura import cura_version
 from .gcode import (
     FILAMENT_DIAMETER_MM,
