@@ -297,7 +297,7 @@ def outline_around(V, F, edges, face_edges, origin, basis, faces=None):
     below = d < 0
     candidates = np.arange(len(F)) if faces is None else faces
     fb = below[F[candidates]]
-    cut_faces = candidates[fb.any(axis=1) & ~fb.all(axis=1)]
+    cut_faces = candidates[(fb[:, 0] != fb[:, 1]) | (fb[:, 1] != fb[:, 2])]  # corners on both sides
     if not len(cut_faces):
         return None
     fe = face_edges[cut_faces]

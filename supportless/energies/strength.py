@@ -89,7 +89,7 @@ def grip_stress(points: np.ndarray, area: float, J: np.ndarray, lever: np.ndarra
                  axis=1)  # (E, 2, 3): [-M_2, M_1] = R u
     trace = float(np.trace(J))
     Jinv = np.linalg.inv(J + 1e-12 * trace * np.eye(2)) if trace > 0 else np.zeros((2, 2))
-    g = np.einsum("qi,ij,ejk->eqk", points, Jinv, R)
+    g = (points @ Jinv) @ R  # (E, q, 3)
     g[..., 2] += 1.0 / area
     g *= sign
     return g[0] if single else g
