@@ -288,12 +288,12 @@ def group_by(values: np.ndarray, keys: np.ndarray, count: int) -> list:
     return [v[bounds[i]:bounds[i + 1]] for i in range(count)]
 
 
-def outline_around(V, F, edges, face_edges, origin, basis, faces=None):
+def outline_around(V, F, edges, face_edges, origin, basis, faces=None, along=None):
     """The outline round ``origin`` of the section of a closed surface by the plane through it square to
     ``basis[2]``: ``(points (q, 2), area, J (2, 2), centroid (3,), faces)`` in the basis's ``(e1, e2)`` about the
     centroid; None where no closed outline encloses ``origin``. Only ``faces`` (indices) are cut when given: an
-    outline they leave open is not one."""
-    d = (V - origin) @ basis[2]
+    outline they leave open is not one. ``along``, ``V @ basis[2]`` when known (several planes of one normal)."""
+    d = (V @ basis[2] if along is None else along) - origin @ basis[2]
     below = d < 0
     candidates = np.arange(len(F)) if faces is None else faces
     fb = below[F[candidates]]

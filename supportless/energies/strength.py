@@ -582,11 +582,12 @@ def _bone_verdicts(V, F, Jt, B, labels, ends, grip_at, mat, weight_per_mm3, load
             ring |= {bone for k in ring for j in B[k] for bone, _ in adjacency.get(int(j), [])}
         nearby = np.concatenate([by_bone[k] for k in sorted(ring)])
         checked = False
+        along = V @ n  # the planes of one bone share their normal
         for frac in BONE_SAMPLES:
             origin = Jt[near] + frac * (Jt[far] - Jt[near])
-            outline = outline_around(V, F, edges, face_edges, origin, basis, nearby)
+            outline = outline_around(V, F, edges, face_edges, origin, basis, nearby, along)
             if outline is None:
-                outline = outline_around(V, F, edges, face_edges, origin, basis)
+                outline = outline_around(V, F, edges, face_edges, origin, basis, along=along)
             if outline is None:
                 continue
             pts, area, J2, centroid, faces = outline
