@@ -271,6 +271,7 @@ def main():
 
     import numba
 
+    start_load = os.getloadavg()
     parts = []
     for m in models:
         warm(m)
@@ -291,8 +292,9 @@ def main():
             "*inclusive* counts the stages a stage calls, *exclusive* does not; the exclusive column and the "
             "remainder add up to the total. The floor is the bare skinning of the poses the search evaluates "
             "(particles x iterations of the default settings), timed in the same process.", "",
-            f"Machine: {os.cpu_count()} cores, numba threads {numba.get_num_threads()}, load average "
-            f"{load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} (1/5/15 min) at the end. "
+            f"Machine: {os.cpu_count()} cores, numba threads {numba.get_num_threads()}, load average (1/5/15 min) "
+            f"{start_load[0]:.2f} / {start_load[1]:.2f} / {start_load[2]:.2f} at the start, "
+            f"{load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} at the end. "
             f"Command: `python benchmarks/profile.py --models {','.join(models)}"
             f"{' --out ' + args.out if args.out else ''}`.", ""]
     text = "\n".join(head + parts)
