@@ -344,7 +344,6 @@ def strong_enough(rig: Rig, candidates: list[Candidate], settings) -> tuple[list
     material = MATERIALS[settings.material]
     height = float(settings.print_height_mm)
     rest = pose_strength(rig, rig.rest_angles(), np.eye(3), height, material)
-    seen: list[tuple[Candidate, object]] = []
     for c in candidates:  # one analysis per print: a copy of another kind prints alike
         twin = c.same_as is not None and c.same_as < len(candidates) and candidates[c.same_as].safety_factor is not None
         if twin:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..base.geometry import place_on_plate, print_pose
+from ..base.geometry import print_pose
 from ..energies.materials import Material
 from ..energies.strength import HANDLING_LOAD_N, Strength, analyse_strength
 from ..files.printframe import rotation_to_z
@@ -80,7 +80,3 @@ def pose_strength(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm:
     V, J = printed_body(rig, angles, rotation, height_mm)
     return analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n, layer_mm)
 
-
-def rest_placed(rig: Rig) -> np.ndarray:
-    """(n, 3) float64: the rest pose on the plate (the display frame)."""
-    return place_on_plate(rig.vertices, rig.up)
