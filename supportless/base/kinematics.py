@@ -478,8 +478,10 @@ def stack_transforms(transforms: np.ndarray) -> np.ndarray:
 
 #: An LBS matrix with fewer non-zeros than this share is kept sparse
 #: (:func:`lbs_operator`). On 2 cores, 200 poses: the bunny (65 % non-zeros)
-#: 25 ms sparse against 27 ms dense; a glTF skin (2 %) 3-5 ms against 39-41 ms.
-SPARSE_LBS = 0.75
+#: 24 ms sparse against 9 ms dense (one batched product), a non-zero of the
+#: compiled sparse loop costing about 4x an entry of the dense product; a glTF
+#: skin (2 %) 3-5 ms against 39-41 ms.
+SPARSE_LBS = 0.25
 
 #: A 3D surface whose skinning matrix would take more than this many bytes as an array is skinned from its
 #: weights (:class:`~supportless.base.skinning.WeightBlocks`) and never builds the matrix: the bunny subdivided

@@ -84,11 +84,15 @@ def grip_stress(points: np.ndarray, area: float, J: np.ndarray, lever: np.ndarra
     r = np.asarray(lever, np.float64)
     single = r.ndim == 1
     r = np.atleast_2d(r)
-    zero = np.zeros(len(r))
-    R = np.stack([np.stack([-r[:, 2], zero, r[:, 0]], axis=1), np.stack([zero, -r[:, 2], r[:, 1]], axis=1)],
-                 axis=1)  # (E, 2, 3): [-M_2, M_1] = R u
-    trace = float(np.trace(J))
-    Jinv = np.linalg.inv(J + 1e-12 * trace * np.eye(2)) if trace > 0 else np.zeros((2, 2))
+    R = np.zeros((len(r), 2, 3))  # [-M_2, M_1] = R u
+    R[:, 0, 0] = R[:, 1, 1] = -r[:, 2]
+    R[:, 0, 2] = r[:, 0]
+    R[:, 1, 2] = r[:, 1]
+    a, b, c, d = (float(x) for x in np.ravel(J))
+    eps = 1e-12 * (a + d)
+    det = (a + eps) * (d + eps) - b * c
+    # the 2 x 2 inverse in closed form (a section's second moments: symmetric, positive unless degenerate)
+    Jinv = np.array([[d + eps, -b], [-c, a + eps]]) / det if a + d > 0 and det != 0 else np.zeros((2, 2))
     g = (points @ Jinv) @ R  # (E, q, 3)
     g[..., 2] += 1.0 / area
     g *= sign

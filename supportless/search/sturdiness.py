@@ -77,6 +77,28 @@ def pose_strength(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm:
     """
     if rig.dim != 3:
         return None
-    V, J = printed_body(rig, angles, rotation, height_mm)
-    return analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n, layer_mm)
+    angles = np.asarray(angles, np.float64)
+    rotation = np.asarray(rotation, np.float64)
+    key = (angles.tobytes(), rotation.tobytes(), float(height_mm), material, float(load_n), float(layer_mm))
+    cache = _strength_cache(rig)
+    if key not in cache:
+        if len(cache) >= STRENGTH_CACHE_SIZE:
+            cache.pop(next(iter(cache)))
+        V, J = printed_body(rig, angles, rotation, height_mm)
+        cache[key] = analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n, layer_mm)
+    return cache[key]
+
+
+#: Analyses kept per rig (:func:`pose_strength`): the choice's answers, the rest pose, the report's and the
+#: pictures' ask again about the same poses.
+STRENGTH_CACHE_SIZE = 32
+
+
+def _strength_cache(rig: Rig) -> dict:
+    """The rig's analyses by pose (insertion ordered: the oldest is dropped first). A rig is not modified after
+    it is built, so its poses' analyses stay true for its lifetime."""
+    cache = rig.__dict__.get("_strength_cache")
+    if cache is None:
+        cache = rig.__dict__["_strength_cache"] = {}
+    return cache
 
