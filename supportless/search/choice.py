@@ -290,7 +290,7 @@ def candidate_answers(rig: Rig, result: PoseResult, per_kind: int = PER_KIND,
     candidates = [Candidate(kind, r, float(p), same_as=j, footprint_mm2=float(footprint_area(
         r.print_vertices, rig.faces, up, scale)) if rig.dim == 3 else None) for (kind, r, j), p in zip(picked, predicted[1:])]
     candidates = resting_on_area(candidates, result.settings.footprint_mm2)
-    candidates, strength = strong_enough(rig, candidates, result.settings)
+    candidates, strength = strong_enough(rig, candidates, result.settings, per_turn=per_kind)
     # the turns with the least predicted support, and the one the search's objective likes best (the first)
     turns = [c for c in candidates if c.kind == "turn"]
     kept_turns = {id(c) for c in sorted(turns, key=lambda c: c.predicted_mm)[:per_kind]} | {id(c) for c in turns[:1]}
@@ -323,13 +323,18 @@ def resting_on_area(candidates: list[Candidate], bound_mm2: float) -> list[Candi
     return kept
 
 
-def strong_enough(rig: Rig, candidates: list[Candidate], settings) -> tuple[list[Candidate], dict | None]:
+def strong_enough(rig: Rig, candidates: list[Candidate], settings, per_turn: int | None = None
+                  ) -> tuple[list[Candidate], dict | None]:
     """The candidates at least as strong as the rest pose as it stands, or as ``settings.min_safety``.
 
-    Each candidate's ``safety_factor`` and ``breaks_at_n`` are set (:func:`~supportless.search.sturdiness.
+    Each candidate weighed gets its ``safety_factor`` and ``breaks_at_n`` (:func:`~supportless.search.sturdiness.
     pose_strength` at ``settings.print_height_mm`` in ``settings.material``). An answer is refused when its
     safety factor is below both the rest pose's and the floor; when every one is, the strongest is kept.
     ``same_as`` is renumbered.
+
+    With ``per_turn``, of the turns of the start pose only those :func:`candidate_answers` keeps are weighed and
+    returned: the first strong one in the search's order and the ``per_turn`` strong ones with the least predicted
+    support (the others are never analysed: a turn is weighed only until enough strong ones are found).
 
     Returns
     -------
@@ -344,19 +349,38 @@ def strong_enough(rig: Rig, candidates: list[Candidate], settings) -> tuple[list
     material = MATERIALS[settings.material]
     height = float(settings.print_height_mm)
     rest = pose_strength(rig, rig.rest_angles(), np.eye(3), height, material)
-    for c in candidates:  # one analysis per print: a copy of another kind prints alike
-        twin = c.same_as is not None and c.same_as < len(candidates) and candidates[c.same_as].safety_factor is not None
-        if twin:
-            c.safety_factor, c.breaks_at_n = candidates[c.same_as].safety_factor, candidates[c.same_as].breaks_at_n
-            continue
-        s = pose_strength(rig, c.result.angles, c.result.rotation, height, material)
-        c.safety_factor = s.safety_factor
-        c.breaks_at_n = s.weakest.breaks_at_n if s.weakest is not None else float("inf")
-    bound = min(rest.safety_factor, floor)
-    kept = [c for c in candidates if c.safety_factor >= bound * (1.0 - 1e-9)]
+    bound = min(rest.safety_factor, floor) * (1.0 - 1e-9)
+
+    def weigh(c):  # one analysis per print: a copy of another kind prints alike
+        if c.safety_factor is None:
+            twin = candidates[c.same_as] if c.same_as is not None and c.same_as < len(candidates) else None
+            if twin is not None and twin.safety_factor is not None:
+                c.safety_factor, c.breaks_at_n = twin.safety_factor, twin.breaks_at_n
+            else:
+                s = pose_strength(rig, c.result.angles, c.result.rotation, height, material)
+                c.safety_factor = s.safety_factor
+                c.breaks_at_n = s.weakest.breaks_at_n if s.weakest is not None else float("inf")
+        return c.safety_factor >= bound
+
+    lazy = [c for c in candidates if c.kind == "turn"] if per_turn is not None else []
+    wanted = {id(c) for c in candidates if all(c is not t for t in lazy)}
+    for c in candidates:
+        if id(c) in wanted:
+            weigh(c)
+    first = next((c for c in lazy if weigh(c)), None)
+    wanted |= {id(first)} if first is not None else set()
+    cheapest = []
+    for c in sorted(lazy, key=lambda c: c.predicted_mm):
+        if len(cheapest) >= per_turn:
+            break
+        if weigh(c):
+            cheapest.append(id(c))
+    wanted |= set(cheapest)
+    weighed = [c for c in candidates if c.safety_factor is not None]
+    kept = [c for c in weighed if id(c) in wanted and c.safety_factor >= bound]
     if not kept:
-        kept = [max(candidates, key=lambda c: c.safety_factor)]
-    refused = [c for c in candidates if all(c is not k for k in kept)]
+        kept = [max(weighed, key=lambda c: c.safety_factor)]
+    refused = [c for c in weighed if c.safety_factor < bound and all(c is not k for k in kept)]
     position = {id(c): i for i, c in enumerate(kept)}
     for c in kept:
         if c.same_as is not None:

@@ -68,6 +68,12 @@ OVERLAP_CERTAIN = 1e-9
 #: None). Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Symmetry").
 SYMMETRY_SHARE = 0.10
 
+#: After the mirrored search, the free search starts from its answer (pose and turn) and runs this share of the
+#: iterations: it frees the pairs where that pays, from where the mirrored search ended, instead of searching the
+#: free space again from the rest pose (which kept its answer on none of the zoo's ten mirrored figures,
+#: benchmarks/RESULTS.md "Symmetry"; "Profile of the default answer" for the time it took).
+FREE_SHARE = 0.25
+
 # --------------------------------------------------------------------------- #
 # pose search
 # --------------------------------------------------------------------------- #
@@ -168,14 +174,23 @@ def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback,
     """Both searches of a figure with a mirror plane, and the mirrored answer unless the free one saves
     :data:`SYMMETRY_SHARE` of its predicted support (``settings.symmetric`` None: the tool's choice).
 
-    The mirrored search runs first; the progress counts both (``phase`` says which). The answer's
-    ``symmetry`` holds both predictions and which was kept.
+    The mirrored search runs first; the free one starts from its answer with :data:`FREE_SHARE` of the
+    iterations (the mirrored answer is one of its particles: never worse by the objective). The progress
+    counts both (``phase`` says which). The answer's ``symmetry`` holds both predictions and which was kept.
     """
     runs, seen = {}, {"it": 0, "offset": 0}
+    free_iterations = max(1, round(FREE_SHARE * settings.iterations))
     for mirrored in (True, False):
-        inner = None if callback is None else _one_count(callback, seen, mirrored)
-        runs[mirrored] = _optimize(rig, settings.replace(symmetric=mirrored), objective, start, start_rotation,
-                                   inner, intersects)
+        inner = None if callback is None else _one_count(callback, seen, mirrored, settings.iterations,
+                                                        free_iterations)
+        if mirrored:
+            runs[True] = _optimize(rig, settings.replace(symmetric=True), objective, start, start_rotation, inner,
+                                   intersects)
+        else:
+            answer = runs[True]
+            runs[False] = _optimize(rig, settings.replace(symmetric=False, iterations=free_iterations), objective,
+                                    answer.angles, answer.rotation if settings.orient == "free" else start_rotation,
+                                    inner, intersects)
         seen["offset"] = seen["it"]
         if runs[mirrored].interrupted:
             break
@@ -193,11 +208,14 @@ def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback,
     return keep
 
 
-def _one_count(callback, seen: dict, mirrored: bool):
-    """A callback for one of the two searches that reports to ``callback`` in one rising count."""
+def _one_count(callback, seen: dict, mirrored: bool, iterations: int, free_iterations: int):
+    """A callback for one of the two searches that reports to ``callback`` in one rising count (the mirrored
+    search runs ``iterations`` per swarm phase, the free one ``free_iterations``)."""
     def inner(it, info):
         seen["it"] = seen["offset"] + it
-        total = 2 * info["iterations"] if mirrored else seen["offset"] + info["iterations"]
+        if mirrored and "total" not in seen:  # the first report is a swarm phase's: it knows the phases
+            seen["total"] = 2 * info["iterations"] - info["phases"] * (iterations - free_iterations)
+        total = seen["total"] if mirrored else seen["offset"] + info["iterations"]
         word = "mirrored" if mirrored else "free"
         return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
     return inner
@@ -359,6 +377,7 @@ class _PoseSearch:
             if self.callback is not None:
                 return self.callback(offset + it, {"value": value, "terms": terms, "angles": to_angles(x[None])[0],
                                                    "rotation": to_rotation(x), "iterations": self.total,
+                                                   "phases": len(self.turns),
                                                    "phase": label or ("pose and turn" if turns else "pose")})
             return None
 

@@ -17,7 +17,7 @@ from supportless.search.settings import SearchSettings
 @pytest.fixture(scope="module")
 def searched(branch_rig):
     # turned onto a side the plate touches at an edge: the footprint rule is not these tests' subject
-    return sl.optimize(branch_rig, particles=10, iterations=4, seed=2, overhang_angle=40.0, footprint_mm2=0.0)
+    return sl.optimize(branch_rig, particles=10, iterations=4, seed=0, overhang_angle=40.0, footprint_mm2=0.0)
 
 
 def test_reduction():

@@ -66,15 +66,17 @@ def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
 def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tpose_rig, bunny_rig):
     """symmetric=None on a mirrored skeleton: both searches, the rule of SYMMETRY_SHARE on predicted support."""
     from supportless.search.naturalness import mirror_error_deg
-    from supportless.search.optimizer import SYMMETRY_SHARE, predicted_mm
+    from supportless.search.optimizer import FREE_SHARE, SYMMETRY_SHARE, predicted_mm
 
     rig = tpose_rig
     seen = []
-    auto = sl.optimize(rig, particles=16, iterations=4, seed=0, callback=lambda it, info: seen.append((it, info)))
+    auto = sl.optimize(rig, particles=16, iterations=8, seed=0, callback=lambda it, info: seen.append((it, info)))
     info = auto.symmetry
     assert info["mode"] == "auto" and info["share"] == SYMMETRY_SHARE
-    mirrored = sl.optimize(rig, particles=16, iterations=4, seed=0, symmetric=True)
-    free = sl.optimize(rig, particles=16, iterations=4, seed=0, symmetric=False)
+    mirrored = sl.optimize(rig, particles=16, iterations=8, seed=0, symmetric=True)
+    # the free search starts from the mirrored answer, pose and turn, with a share of the iterations
+    free = sl.optimize(rig, particles=16, iterations=round(8 * FREE_SHARE), seed=0, symmetric=False,
+                       start=mirrored.angles, start_rotation=mirrored.rotation)
     assert mirrored.symmetry is None and free.symmetry is None  # forced either way: one search
     assert info["mirrored_mm"] == pytest.approx(predicted_mm(rig, mirrored))  # the same searches, the same seed
     assert info["free_mm"] == pytest.approx(predicted_mm(rig, free))
@@ -86,6 +88,7 @@ def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tp
     # the progress counts both searches in one rising count, each phase named
     its = [it for it, _ in seen]
     assert its == sorted(its) and {i["phase"].split(":")[0] for _, i in seen} == {"mirrored", "free"}
-    assert its[-1] <= seen[-1][1]["iterations"]
+    assert its == list(range(1, len(its) + 1)) and its[-1] == seen[-1][1]["iterations"]  # counted to the end
+    assert {i["iterations"] for _, i in seen} == {len(its)}  # the whole count known from the start
     # a skeleton without a mirror plane: one free search, nothing to choose
     assert sl.optimize(bunny_rig, particles=8, iterations=2, seed=0, orient="keep").symmetry is None
