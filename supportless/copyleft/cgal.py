@@ -16,8 +16,8 @@ import numpy as np
 
 from ..base.geometry import surface_digest
 
-__all__ = ["PART_FACES", "face_parts", "intersecting_faces", "intersecting_face_pairs", "self_intersects",
-           "self_union"]
+__all__ = ["PART_FACES", "face_parts", "intersecting_faces", "intersecting_faces_since", "intersecting_face_pairs",
+           "self_intersects", "self_union"]
 
 #: A surface with more triangles than this is checked in parts (:func:`face_parts`), one CGAL call each: the
 #: same pairs, in a fraction of the memory (CGAL's exact kernel holds every triangle of a part at once; the
@@ -53,6 +53,51 @@ def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         :func:`supportless.energies.intersection.self_intersection_volume`.
     """
     return _detect(vertices, faces, first_only=False)
+
+
+#: :func:`intersecting_faces_since` asks CGAL about the whole surface when the triangles near those that moved are
+#: more than this share of it (a part costs about as much as the whole then).
+NEAR_SHARE = 0.6
+
+
+def intersecting_faces_since(vertices: np.ndarray, faces: np.ndarray, before: np.ndarray,
+                             pairs_before: np.ndarray) -> np.ndarray:
+    """:func:`intersecting_faces` of a surface whose earlier state's pairs are known, asking CGAL only about the
+    triangles that moved and those their bounding box meets.
+
+    A pair of triangles neither of which moved intersects as it did; a pair with one that moved has both in the
+    box of the moved triangles, so it is among the pairs of the triangles asked (one CGAL call on them, shared
+    vertices kept shared). An edit of one bone of a skinned character moves the triangles it weighs on.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+    before : (n, 3) float64
+        The same surface's vertices when ``pairs_before`` was found.
+    pairs_before : (k, 2) int64
+        Its pairs (:func:`intersecting_faces`, or this function's).
+
+    Returns
+    -------
+    pairs : (k', 2) int64
+        Each pair once, smaller face first, sorted.
+    """
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int64)
+    old = np.unique(np.sort(np.asarray(pairs_before, np.int64).reshape(-1, 2), axis=1), axis=0)
+    moved = np.any(V != np.asarray(before, np.float64), axis=1)[F].any(axis=1)
+    if not moved.any():
+        return old
+    corners = V[F]
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    near = np.all((hi >= lo[moved].min(axis=0)) & (lo <= hi[moved].max(axis=0)), axis=1)
+    if near.mean() > NEAR_SHARE:
+        pairs = intersecting_faces(V, F)
+        return np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
+    found = _pairs_of_parts(V, F, [np.flatnonzero(near)], False)
+    kept = old[~moved[old].any(axis=1)]
+    return np.unique(np.concatenate([kept, *found]), axis=0) if len(kept) or found else np.zeros((0, 2), np.int64)
 
 
 def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:

@@ -13,7 +13,7 @@ import numpy as np
 
 from ._grid_common import ENTERING, LEAVING, RISKY, grid_layout
 
-__all__ = ["columns3_numpy", "pose2_numpy", "pose3_numpy"]
+__all__ = ["columns3_numpy", "pose2_numpy", "pose3_numpy", "sweep_crossings"]
 
 
 def _edges(ax, ay, bx, by):
@@ -56,7 +56,7 @@ def _pairs(count):
     return elem, off
 
 
-def _sweep(pix, z, code, zplate):
+def sweep_crossings(pix, z, code, zplate):
     """Sort crossings by (pixel, height) and sweep every ray at once.
 
     Parameters
@@ -181,7 +181,7 @@ def columns3_numpy(X, F, orient, R, tau, support=True):
               & _inside(_edges(c[:, 0], c[:, 1], a[:, 0], a[:, 1]), px, py))
     f, px, py, i, j = f[inside], px[inside], py[inside], i[inside], j[inside]
     z = A[f, 2] + gx[f] * (px - A[f, 0]) + gy[f] * (py - A[f, 1])
-    inter, sup, (pix, bottom, top) = _sweep(j * nx + i, z, code[f], zplate)
+    inter, sup, (pix, bottom, top) = sweep_crossings(j * nx + i, z, code[f], zplate)
     return inter, sup, (u0 + (pix % nx + 0.5) * cell, w0 + (pix // nx + 0.5) * cell, bottom, top), cell
 
 
@@ -224,5 +224,5 @@ def pose2_numpy(X, E, orient, R, tau):
     ok = (px >= lo[e]) & (px < hi[e])
     e, i, px = e[ok], i[ok], px[ok]
     z = a[e, 1] + slope[e] * (px - a[e, 0])
-    inter, sup, _ = _sweep(i, z, code[e], zplate)
+    inter, sup, _ = sweep_crossings(i, z, code[e], zplate)
     return inter * cell, sup * cell

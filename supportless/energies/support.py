@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..files.printer import SEARCH_OVERHANG_ANGLE
-from ._grid_numpy import columns3_numpy
+from ._grid_crossings import crossings3
+from ._grid_numpy import sweep_crossings
 from .raygrid import DEFAULT_RESOLUTION, ray_grid
 from .surface import frame_matrix, orientation_sign, prepare, to_frame
 
@@ -93,7 +94,9 @@ def support_columns(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, r
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
     orient = float(orientation_sign(V, F, "numpy")[0])
     X = to_frame(V, u)[0]
-    _, _, (cu, cw, bottom, top), cell = columns3_numpy(X, F, orient, int(resolution), tau)
+    pix, z, code, (cell, nx, _, u0, w0) = crossings3(X, F, orient, int(resolution), tau)
+    _, _, (pix, bottom, top) = sweep_crossings(pix, z, code, float(X[:, 2].min()))
+    cu, cw = u0 + (pix % max(nx, 1) + 0.5) * cell, w0 + (pix // max(nx, 1) + 0.5) * cell
     basis = frame_matrix(u)
     bottoms = np.stack([cu, cw, bottom], axis=1) @ basis
     return bottoms, top - bottom, float(cell), basis

@@ -111,3 +111,65 @@ def test_a_large_surface_asked_again_is_answered_from_memory(monkeypatch):
     W[0] += 1e-9
     intersecting_faces(W, F)
     assert len(calls) > n
+
+
+def _normal(pairs):
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    return np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
+
+
+def test_pairs_since_an_earlier_pose_are_the_whole_surfaces_pairs(tpose_rig, monkeypatch):
+    """One limb moved after another: the pairs found from the last pose's pairs are those of a whole check."""
+    from supportless.copyleft import cgal
+    from supportless.copyleft.cgal import intersecting_faces, intersecting_faces_since
+
+    rig = tpose_rig
+    asked = []
+    real = cgal._cgal
+    monkeypatch.setattr(cgal, "_cgal", lambda V, F, first: asked.append(len(F)) or real(V, F, first))
+    rng = np.random.default_rng(3)
+    angles = rig.rest_angles().copy()
+    V0 = rig.pose(angles)
+    pairs = _normal(intersecting_faces(V0, rig.faces))
+    crossed = 0
+    for step in range(6):
+        bone = [4, 5, 7, 8, 11, 14][step]  # arms and legs, one at a time
+        angles[bone] = rng.uniform(-1.6, 1.6, 3)
+        V1 = rig.pose(angles)
+        asked.clear()
+        since = intersecting_faces_since(V1, rig.faces, V0, pairs)
+        partial = sum(asked)
+        whole = _normal(intersecting_faces(V1, rig.faces))
+        np.testing.assert_array_equal(since, whole)
+        assert partial <= len(rig.faces)
+        crossed += len(whole) > 0
+        V0, pairs = V1, since
+    assert crossed  # some of these poses cross themselves, so kept and new pairs are both tested
+    # nothing moved: the earlier pairs, no CGAL call
+    asked.clear()
+    np.testing.assert_array_equal(intersecting_faces_since(V0, rig.faces, V0.copy(), pairs), pairs)
+    assert not asked
+
+
+def test_pairs_since_ask_only_about_what_moved_and_what_its_box_meets(monkeypatch):
+    """Four boxes in a row; the last one moved into the third: CGAL is asked about those two only, and the
+    pairs of the first two (crossing each other, not moved) are kept."""
+    from supportless.copyleft import cgal
+    from supportless.copyleft.cgal import intersecting_faces, intersecting_faces_since
+
+    boxes = [box((0, 0, 0), (1, 1, 1)), box((0.5, 0.2, 0.2), (1.5, 0.8, 0.8)), box((3, 0, 0), (4, 1, 1)),
+             box((6, 0, 0), (7, 1, 1))]
+    V0 = np.vstack([v for v, _ in boxes])
+    F = np.vstack([f + 8 * i for i, (_, f) in enumerate(boxes)])
+    before = _normal(intersecting_faces(V0, F))
+    assert len(before) and before.max() < 24  # the first two cross
+    V1 = V0.copy()
+    V1[24:] -= [2.5, 0.0, 0.0]  # the fourth box into the third
+    asked = []
+    real = cgal._cgal
+    monkeypatch.setattr(cgal, "_cgal", lambda V, F, first: asked.append(len(F)) or real(V, F, first))
+    since = intersecting_faces_since(V1, F, V0, before)
+    # one call: the fourth box's 12 triangles and the third's that its box meets (all but the two at x = 3)
+    assert asked == [22]
+    np.testing.assert_array_equal(since, _normal(intersecting_faces(V1, F)))
+    assert (since < 24).all(axis=1).any() and (since >= 24).any()  # kept pairs and new ones

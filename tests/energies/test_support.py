@@ -213,3 +213,33 @@ def test_faces_inside_material_need_no_support():
     assert support_volume(V, F, UP) == pytest.approx(1.0, rel=EXACT)
     # the prism counts the whole bottom of b: area 2 at height 1
     assert overhang_energy(V, F, UP) == pytest.approx(2.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("resolution", [7, 48, 64])
+def test_compiled_crossings_are_the_numpy_paths_to_the_last_bit(tpose_rig, resolution):
+    """support_columns' compiled crossings sweep to the numpy path's columns exactly (posed, tilted, coarse
+    and fine grids), and their column volume is the numpy estimate's."""
+    from supportless.base.geometry import print_pose
+    from supportless.energies._grid_crossings import crossings3
+    from supportless.energies._grid_numpy import columns3_numpy, sweep_crossings
+    from supportless.energies.support import support_columns
+    from supportless.energies.surface import orientation_sign, to_frame
+
+    rig = tpose_rig
+    angles = np.random.default_rng(resolution).uniform(-0.6, 0.6, (rig.bone_count, 3))
+    c, s = np.cos(0.7), np.sin(0.7)
+    for V in (rig.pose(angles), print_pose(rig.pose(angles), np.array([[1, 0, 0], [0, c, -s], [0, s, c]]), rig.up)):
+        X = to_frame(V[None], rig.up)[0]
+        orient = float(orientation_sign(V[None], rig.faces, "numpy")[0])
+        tau = np.cos(np.radians(45.0))
+        inter, sup, (cu, cw, bottom, top), cell = columns3_numpy(X, rig.faces, orient, resolution, tau)
+        pix, z, code, (cell2, nx, _, u0, w0) = crossings3(X, rig.faces, orient, resolution, tau)
+        inter2, sup2, (pix2, bottom2, top2) = sweep_crossings(pix, z, code, float(X[:, 2].min()))
+        assert cell2 == cell and inter2 == inter and sup2 == sup and len(pix2) > 0
+        np.testing.assert_array_equal(bottom2, bottom)
+        np.testing.assert_array_equal(top2, top)
+        np.testing.assert_array_equal(u0 + (pix2 % nx + 0.5) * cell, cu)
+        np.testing.assert_array_equal(w0 + (pix2 // nx + 0.5) * cell, cw)
+        _, heights, cell3, _ = support_columns(V, rig.faces, rig.up, 45.0, resolution)
+        assert (heights * cell3**2).sum() == pytest.approx(support_volume(V, rig.faces, rig.up, 45.0, resolution,
+                                                                          backend="numpy"), rel=1e-12)
