@@ -259,7 +259,7 @@ class Rig:
         return abs(float(signed_volume(self.vertices, self.faces)))
 
     def crossings(self, vertices: np.ndarray, posed_joints: np.ndarray, rules: ContactRules | None = None,
-                  overlap_volume: float | None = None) -> ContactVerdict:
+                  overlap_volume: float | None = None, pairs: np.ndarray | None = None) -> ContactVerdict:
         """Whether a posed surface's crossings are all contact between jointed parts (:mod:`~supportless.rig.contact`).
 
         Parameters
@@ -272,6 +272,8 @@ class Rig:
             None: no contact allowed (any crossing refuses the pose).
         overlap_volume : float, optional
             The volume it covers twice (the ray grid's), bounded by ``rules.volume`` of :attr:`rest_volume`.
+        pairs : (k, 2) int64, optional
+            Its intersecting triangle pairs when the caller has them (CGAL's, found here otherwise).
 
         Returns
         -------
@@ -283,8 +285,9 @@ class Rig:
         rules = rules if rules is not None else ContactRules(hops=-1)
         from ..copyleft.cgal import intersecting_faces
 
-        return contact_verdict(self.body_parts, vertices, posed_joints, intersecting_faces(vertices, self.faces),
-                               rules, overlap_volume, self.rest_volume)
+        pairs = intersecting_faces(vertices, self.faces) if pairs is None else pairs
+        return contact_verdict(self.body_parts, vertices, posed_joints, pairs, rules, overlap_volume,
+                               self.rest_volume)
 
     def posed_joints(self, angles: np.ndarray) -> np.ndarray:
         """Joint positions of a batch of poses, (P, j, d) or (j, d) float64."""

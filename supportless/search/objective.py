@@ -31,6 +31,7 @@ import numpy as np
 
 from ..base.geometry import signed_volume
 from ..base.kinematics import lbs_operator, pruned_weights, skin
+from ..copyleft.cgal import intersecting_faces
 from ..energies import arap as arap_mod
 from ..energies.footprint import footprint_area
 from ..energies.intersection import DEFAULT_RESOLUTION, self_intersection_volume
@@ -461,17 +462,21 @@ class Objective:
     def forbidden(self, angles: np.ndarray) -> bool:
         """Whether the pose ``angles (m, 3) float64`` crosses itself other than by contact within the rules.
 
-        CGAL's exact test first (stopping at the first crossing); a pose that crosses is then judged by
-        :meth:`Rig.crossings` with :attr:`contact` and its ray-grid overlap. False in 2D.
+        CGAL's exact test (stopping at the first crossing when no contact is allowed); a pose that crosses is
+        then judged by :meth:`Rig.crossings` with :attr:`contact` and its ray-grid overlap, from the pairs of
+        one CGAL call. False in 2D.
         """
         rig = self.rig
-        if rig.dim != 3 or not rig.self_intersects(angles):
+        if rig.dim != 3:
             return False
         if self.contact is None or not self.contact.allows_contact:
-            return True
+            return rig.self_intersects(angles)
         V = rig.pose(angles)
+        pairs = intersecting_faces(V, rig.faces)
+        if not len(pairs):
+            return False
         overlap = float(np.asarray(self._intersection(V[None]))[0])
-        return not rig.crossings(V, rig.posed_joints(angles), self.contact, overlap).allowed
+        return not rig.crossings(V, rig.posed_joints(angles), self.contact, overlap, pairs).allowed
 
     def combine(self, terms: dict) -> np.ndarray:
         """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""
