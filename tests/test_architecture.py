@@ -7,6 +7,7 @@ functions alike — so an import hidden in a function cannot close a cycle.
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import networkx as nx
@@ -51,6 +52,12 @@ def imported_modules(name: str, path: Path, known: set[str]) -> set[str]:
 
 
 def import_graph() -> nx.DiGraph:
+    """The package's import graph (a copy: a test may change it), read once per session."""
+    return _import_graph().copy()
+
+
+@functools.cache
+def _import_graph() -> nx.DiGraph:
     mods = modules()
     graph = nx.DiGraph()
     graph.add_nodes_from(mods)
