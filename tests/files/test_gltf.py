@@ -1048,7 +1048,7 @@ def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, mon
     coarse = dense.coarse_rig()
     assert len(coarse.faces) <= len(F2) // 4
     np.testing.assert_allclose(dense.weights.sum(1), 1.0, atol=1e-9)
-    result = optimize(dense, particles=8, iterations=2, orient="keep")
+    result = optimize(dense, particles=8, iterations=2, orient="keep", polish=2)  # the polish is not the subject
     assert result.vertices.shape == V2.shape and result.stats["proxy_faces"] == len(coarse.faces)
 
 

@@ -1,6 +1,7 @@
 """Measure the viewer's input-to-update latency on a model.
 
-    python -m supportless.apps.ui.bench MODEL [--skeleton S.tgf] [--up auto] [--edits 40] [--browser /usr/bin/chromium]
+    python -m supportless.apps.ui.bench MODEL [--skeleton S.tgf] [--up auto] [--edits 40] [--bone NAME ...]
+        [--browser /usr/bin/chromium]
 
 Server side: from an edit reaching the app (what a slider callback does) to
 (1) the new bone frames being flushed to the browser (``mesh``) and (2) the
@@ -60,6 +61,14 @@ def browser_latency(app, chromium: str, presses: int = 20) -> dict:
     return {"page_median": float(np.median(times)), "page_max": float(np.max(times))}
 
 
+def _bone_named(names: list, end: str) -> int:
+    """The index of the first bone whose name ends with ``end``; SystemExit with the names when none does."""
+    for i, name in enumerate(names):
+        if name and name.endswith(end):
+            return i
+    raise SystemExit(f"no bone's name ends with {end!r}; the bones: {', '.join(n for n in names if n)}")
+
+
 def main(argv=None) -> None:
     from ...rig.load import load_rig
     from .app import App
@@ -69,15 +78,21 @@ def main(argv=None) -> None:
     ap.add_argument("--skeleton")
     ap.add_argument("--up", default="auto")
     ap.add_argument("--edits", type=int, default=40)
+    ap.add_argument("--bone", action="append", default=None,
+                    help="a bone to edit, by the end of its name (repeat for several; default: the last bone)")
     ap.add_argument("--browser", help="path of a Chromium to also measure in the page")
     args = ap.parse_args(argv)
     rig = load_rig(args.model, skeleton=args.skeleton, up=args.up)
     app = App(rig, verbose=False)
     try:
         print(f"{rig!r}")
-        res = server_latency(app, args.edits)
-        print("server: mesh (bone frames sent) median {mesh_median:.1f} ms, max {mesh_max:.1f} ms; "
-              "with energies/overlays median {full_median:.1f} ms, max {full_max:.1f} ms".format(**res))
+        names = rig.bone_names() or []
+        bones = [None] if not args.bone else [_bone_named(names, b) for b in args.bone]
+        for bone in bones:
+            res = server_latency(app, args.edits, bone)
+            label = "" if bone is None else f"{names[bone]}: "
+            print(label + "server: mesh (bone frames sent) median {mesh_median:.1f} ms, max {mesh_max:.1f} ms; "
+                  "with energies/overlays median {full_median:.1f} ms, max {full_max:.1f} ms".format(**res))
         if args.browser:
             res = browser_latency(app, args.browser)
             print("page: key press -> energies redrawn median {page_median:.1f} ms, "
