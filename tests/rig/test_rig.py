@@ -454,7 +454,7 @@ def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
 @pytest.mark.slow
 def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branch):
     rig, _ = dense_branch
-    result = sl.optimize(rig, particles=12, iterations=4, orient="keep")
+    result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=2)  # a short polish
     assert result.stats["proxy_faces"] == len(rig.coarse_rig().faces)
     assert result.vertices.shape == rig.vertices.shape
     # the value and terms are those of the full surface at the found pose
