@@ -211,7 +211,9 @@ class SearchSettings:
         True: keep left/right pairs of bones mirror images
         (:mod:`supportless.search.layout`); False: pose each bone freely;
         None (the default): for a figure whose rest skeleton has a mirror
-        plane, search both ways and keep the mirrored pose unless the free
+        plane, search mirrored, then freely from that answer
+        (:data:`supportless.search.optimizer.FREE_SHARE` of the iterations),
+        and keep the mirrored pose unless the free
         one needs :data:`supportless.search.optimizer.SYMMETRY_SHARE` less
         predicted support (:func:`supportless.search.optimizer.optimize`); a
         start pose that breaks the mirror is searched freely.
