@@ -60,8 +60,8 @@ def intersecting_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 NEAR_SHARE = 0.6
 
 
-def intersecting_faces_since(vertices: np.ndarray, faces: np.ndarray, before: np.ndarray,
-                             pairs_before: np.ndarray) -> np.ndarray:
+def intersecting_faces_since(vertices: np.ndarray, faces: np.ndarray, before: np.ndarray | None = None,
+                             pairs_before: np.ndarray | None = None) -> np.ndarray:
     """:func:`intersecting_faces` of a surface whose earlier state's pairs are known, asking CGAL only about the
     triangles that moved and those their bounding box meets.
 
@@ -73,9 +73,10 @@ def intersecting_faces_since(vertices: np.ndarray, faces: np.ndarray, before: np
     ----------
     vertices : (n, 3) float64
     faces : (f, 3) int64
-    before : (n, 3) float64
-        The same surface's vertices when ``pairs_before`` was found.
-    pairs_before : (k, 2) int64
+    before : (n, 3) float64, optional
+        The same surface's vertices when ``pairs_before`` was found (None, or another shape: the whole surface
+        is asked).
+    pairs_before : (k, 2) int64, optional
         Its pairs (:func:`intersecting_faces`, or this function's).
 
     Returns
@@ -85,19 +86,25 @@ def intersecting_faces_since(vertices: np.ndarray, faces: np.ndarray, before: np
     """
     V = np.ascontiguousarray(vertices, np.float64)
     F = np.ascontiguousarray(faces, np.int64)
-    old = np.unique(np.sort(np.asarray(pairs_before, np.int64).reshape(-1, 2), axis=1), axis=0)
+    if before is None or np.shape(before) != V.shape:
+        return _normalised(intersecting_faces(V, F))
     moved = np.any(V != np.asarray(before, np.float64), axis=1)[F].any(axis=1)
+    old = _normalised(pairs_before)
     if not moved.any():
         return old
     corners = V[F]
     lo, hi = corners.min(axis=1), corners.max(axis=1)
     near = np.all((hi >= lo[moved].min(axis=0)) & (lo <= hi[moved].max(axis=0)), axis=1)
     if near.mean() > NEAR_SHARE:
-        pairs = intersecting_faces(V, F)
-        return np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
+        return _normalised(intersecting_faces(V, F))
     found = _pairs_of_parts(V, F, [np.flatnonzero(near)], False)
-    kept = old[~moved[old].any(axis=1)]
-    return np.unique(np.concatenate([kept, *found]), axis=0) if len(kept) or found else np.zeros((0, 2), np.int64)
+    return _normalised(np.concatenate([old[~moved[old].any(axis=1)], *found]))
+
+
+def _normalised(pairs) -> np.ndarray:
+    """(k, 2) int64: each pair once, smaller face first, sorted."""
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    return np.unique(np.sort(pairs, axis=1), axis=0)
 
 
 def intersecting_face_pairs(vertices: np.ndarray, faces: np.ndarray) -> int:

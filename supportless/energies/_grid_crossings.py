@@ -2,7 +2,7 @@
 
 :func:`crossings3` lists the same crossings as the numpy path, in the same order (faces in order, each face's
 ray centres row by row), with the same exact, tie-broken inside test (:mod:`._grid_common`), so the numpy sweep
-(:func:`._grid_numpy._sweep`) of either gives the same columns to the last bit. The numpy path builds every
+(:func:`._grid_numpy.sweep_crossings`) of either gives the same columns to the last bit. The numpy path builds every
 (face, ray) candidate as arrays; this loops over them once, in two passes (count, then fill) over the faces.
 """
 

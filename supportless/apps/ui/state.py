@@ -43,7 +43,7 @@ from typing import Callable
 
 import numpy as np
 
-from ...copyleft.cgal import intersecting_faces, intersecting_faces_since
+from ...copyleft.cgal import intersecting_faces_since
 from ...energies.overhang import risky_faces
 from ...files.printframe import PrintFrame, rig_print_frame
 from ...report.report import pose_measures, reduction
@@ -243,11 +243,7 @@ class EditorState(PoseEditing, PoseFiles, BackgroundSearch):
         """The intersecting triangle pairs of the surface ``V`` (CGAL), asked only about what moved since the
         last pose checked (:func:`~supportless.copyleft.cgal.intersecting_faces_since`): an edit redraws
         without checking the whole body again."""
-        last = getattr(self, "_last_exact", None)  # (vertices, pairs), replaced whole: safe across threads
-        if last is None or last[0].shape != V.shape:
-            pairs = intersecting_faces(V, self.rig.faces)
-            pairs = np.unique(np.sort(pairs, axis=1), axis=0) if len(pairs) else np.zeros((0, 2), np.int64)
-        else:
-            pairs = intersecting_faces_since(V, self.rig.faces, *last)
+        last = getattr(self, "_last_exact", None) or (None, None)  # replaced whole: safe across threads
+        pairs = intersecting_faces_since(V, self.rig.faces, *last)
         self._last_exact = (np.array(V, np.float64), pairs)
         return pairs
