@@ -15,6 +15,7 @@ above), is an edge of those polygons run counter-clockwise; the polygons' area i
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 __all__ = ["FIRST_LAYER_MM", "footprint_area", "section_area"]
 
@@ -28,10 +29,12 @@ def section_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, above:
     Parameters
     ----------
     vertices : (P, n, 3) or (n, 3) float64
-        Closed, outward oriented surfaces (one per pose), in the frame where ``up`` is up.
+        Closed, outward oriented surfaces (one per pose).
     faces : (f, 3) int64
-    up : (3,) float64
-        Unit direction the heights are measured along.
+    up : (3,) or (P, 3) float64
+        Direction the heights are measured along, one for all poses or one per pose (normalised here). A turned
+        pose ``V @ R.T`` measured along ``up`` is the pose ``V`` measured along ``R.T @ up``: the search passes
+        that direction instead of turning its poses.
     above : float or (P,) float64
         Height of the section over each surface's lowest point, in the vertices' units.
 
@@ -42,36 +45,59 @@ def section_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, above:
     """
     V = np.asarray(vertices, np.float64)
     single = V.ndim == 2
-    V = V[None] if single else V
-    F = np.asarray(faces, np.int64)
-    up = np.asarray(up, np.float64) / np.linalg.norm(up)
-    h = V @ up  # (P, n)
-    level = h.min(axis=1) + np.broadcast_to(np.asarray(above, np.float64), (len(V),))
-    s = h - level[:, None]  # (P, n): below the plane where negative
-    sf = s[:, F]  # (P, f, 3)
-    low = sf <= 0
-    crossing = low.any(axis=2) & ~low.all(axis=2)  # faces the plane cuts (most faces are far above it)
-    pose, face = np.nonzero(crossing)
-    area = np.zeros(len(V))
-    if len(pose):
-        corners = V[pose[:, None], F[face]]  # (k, 3, 3)
-        sk = sf[pose, face]  # (k, 3)
-        ends = []
-        for a, b in ((0, 1), (1, 2), (2, 0)):
-            sa, sb = sk[:, a], sk[:, b]
-            cut = (sa <= 0) != (sb <= 0)
-            t = np.where(cut, sa / np.where(cut, sa - sb, 1.0), 0.0)
-            ends.append((cut, corners[:, a] + t[:, None] * (corners[:, b] - corners[:, a])))
-        # a cut face has exactly two cut edges: the first and the last of them
-        first = np.where(ends[0][0][:, None], ends[0][1], ends[1][1])
-        second = np.where(ends[2][0][:, None], ends[2][1], ends[1][1])
-        normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        along = np.cross(up, normal)  # the counter-clockwise way round the section, seen from above
-        sign = np.sign(np.einsum("kj,kj->k", second - first, along))
-        shoelace = 0.5 * sign * (np.cross(first, second) @ up)
-        area = np.bincount(pose, weights=shoelace, minlength=len(V))
-    area = np.maximum(area, 0.0)
+    V = np.ascontiguousarray(V[None] if single else V)
+    U = np.broadcast_to(np.asarray(up, np.float64), (len(V), 3))
+    U = np.ascontiguousarray(U / np.linalg.norm(U, axis=1, keepdims=True))
+    level = np.ascontiguousarray(np.broadcast_to(np.asarray(above, np.float64), (len(V),)))
+    area = _sections(V, np.ascontiguousarray(faces, np.int64), U, level)
     return float(area[0]) if single else area
+
+
+@njit(cache=True, parallel=True)
+def _sections(V, F, U, above):
+    """(P,) float64: :func:`section_area` of ``V`` (P, n, 3) along ``U`` (P, 3) unit at ``above`` (P,).
+
+    Each cut face adds ``1/2 sign (p x q) . u`` for the segment ``pq`` where the plane cuts it, ``sign`` turning the
+    segment so that the face's outward normal is on its right seen from above (counter-clockwise round the section).
+    """
+    P, n = V.shape[0], V.shape[1]
+    out = np.zeros(P)
+    for p in prange(P):
+        ux, uy, uz = U[p, 0], U[p, 1], U[p, 2]
+        h = np.empty(n)
+        low = np.inf
+        for i in range(n):
+            h[i] = V[p, i, 0] * ux + V[p, i, 1] * uy + V[p, i, 2] * uz
+            low = min(low, h[i])
+        level = low + above[p]
+        area = 0.0
+        for f in range(F.shape[0]):
+            a, b, c = F[f, 0], F[f, 1], F[f, 2]
+            sa, sb, sc = h[a] - level, h[b] - level, h[c] - level
+            below = (sa <= 0.0) + (sb <= 0.0) + (sc <= 0.0)
+            if below == 0 or below == 3:
+                continue
+            # the two cut edges in the order ab, bc, ca: the first and the last of them
+            ends = np.empty((2, 3))
+            k = 0
+            for i, j, si, sj in ((a, b, sa, sb), (b, c, sb, sc), (c, a, sc, sa)):
+                if (si <= 0.0) != (sj <= 0.0):
+                    t = si / (si - sj)
+                    for d in range(3):
+                        ends[min(k, 1), d] = V[p, i, d] + t * (V[p, j, d] - V[p, i, d])
+                    k += 1
+            e1x, e1y, e1z = V[p, b, 0] - V[p, a, 0], V[p, b, 1] - V[p, a, 1], V[p, b, 2] - V[p, a, 2]
+            e2x, e2y, e2z = V[p, c, 0] - V[p, a, 0], V[p, c, 1] - V[p, a, 1], V[p, c, 2] - V[p, a, 2]
+            nx, ny, nz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
+            ax_, ay_, az_ = uy * nz - uz * ny, uz * nx - ux * nz, ux * ny - uy * nx  # up x normal
+            fx, fy, fz = ends[0, 0], ends[0, 1], ends[0, 2]
+            sx, sy, sz = ends[1, 0], ends[1, 1], ends[1, 2]
+            run = (sx - fx) * ax_ + (sy - fy) * ay_ + (sz - fz) * az_
+            sign = 1.0 if run > 0.0 else (-1.0 if run < 0.0 else 0.0)
+            cross_u = (fy * sz - fz * sy) * ux + (fz * sx - fx * sz) * uy + (fx * sy - fy * sx) * uz
+            area += 0.5 * sign * cross_u
+        out[p] = max(area, 0.0)
+    return out
 
 
 def footprint_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, mm_per_unit: float | np.ndarray,
@@ -83,7 +109,8 @@ def footprint_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, mm_p
     vertices : (P, n, 3) or (n, 3) float64
         Closed, outward oriented surfaces as printed (``up`` up).
     faces : (f, 3) int64
-    up : (3,) float64
+    up : (3,) or (P, 3) float64
+        One direction, or one per pose (:func:`section_area`).
     mm_per_unit : float or (P,) float64
         Millimetres per unit of ``vertices`` at the printed size.
     first_layer_mm : float

@@ -36,14 +36,14 @@ __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area
 def _kernel3(V, F, up, orient, tau, mask, floor):
     """Energy and risky area per pose (3D).
 
-    ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (3,) float64
-    unit, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
+    ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (P, 3) float64
+    unit, one per pose, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
     bool with the risky faces and returns (P, 2) float64 [energy, risky area].
     """
     P = V.shape[0]
     out = np.zeros((P, 2), np.float64)
-    ux, uy, uz = up[0], up[1], up[2]
     for p in prange(P):
+        ux, uy, uz = up[p, 0], up[p, 1], up[p, 2]
         X = V[p]
         plate = np.inf
         for i in range(X.shape[0]):
@@ -86,14 +86,14 @@ def _kernel2(V, E, up, orient, tau, mask, floor):
     """Energy and risky length per pose (2D).
 
     ``V`` (P, n, 2) float64 poses, ``E`` (e, 2) int64 boundary edges
-    (:func:`.surface.boundary_edges`), ``up`` (2,) float64 unit, ``orient``
+    (:func:`.surface.boundary_edges`), ``up`` (P, 2) float64 unit, one per pose, ``orient``
     (P,) float64; fills ``mask`` (P, e) bool with the risky edges and returns
     (P, 2) float64 [energy, risky length].
     """
     P = V.shape[0]
     out = np.zeros((P, 2), np.float64)
-    ux, uy = up[0], up[1]
     for p in prange(P):
+        ux, uy = up[p, 0], up[p, 1]
         X = V[p]
         plate = np.inf
         for i in range(X.shape[0]):
@@ -130,26 +130,32 @@ def _numpy(V, F, u, orient, tau, floor=0.0):
     P = V.shape[0]
     d = V.shape[-1]
     E = F if d == 3 else boundary_edges(F)
+    U = np.broadcast_to(u, (P, d))
     out = np.zeros((P, 2))
     mask = np.zeros((P, E.shape[0]), np.bool_)
     chunk = max(1, 2_000_000 // max(1, E.shape[0]))
     for s in range(0, P, chunk):  # bounded memory: poses in chunks
         X = V[s:s + chunk]
+        u = U[s:s + chunk, None, :]  # (p, 1, d): each pose's direction
+
+        def along(A):
+            return np.sum(A * u, axis=-1)
+
         o = orient[s:s + chunk, None]
-        plate = (X @ u).min(axis=1)[:, None]
+        plate = along(X).min(axis=1)[:, None]
         if d == 3:
             a, b, c = X[:, E[:, 0]], X[:, E[:, 1]], X[:, E[:, 2]]
             n = np.cross(b - a, c - a)  # doubled area times unit normal
             size = np.linalg.norm(n, axis=-1)
-            proj = o * (n @ u)
-            h = ((a + b + c) @ u) / 3.0 - plate + floor
+            proj = o * along(n)
+            h = along(a + b + c) / 3.0 - plate + floor
             scale = 0.5
         else:
             a, b = X[:, E[:, 0]], X[:, E[:, 1]]
             t = b - a
             size = np.linalg.norm(t, axis=-1)
-            proj = o * (t[..., 1] * u[0] - t[..., 0] * u[1])  # outward normal (ty, -tx)
-            h = 0.5 * ((a + b) @ u) - plate + floor
+            proj = o * (t[..., 1] * u[..., 0] - t[..., 0] * u[..., 1])  # outward normal (ty, -tx)
+            h = 0.5 * along(a + b) - plate + floor
             scale = 1.0
         risky = (size > 0.0) & (proj < -tau * size)
         out[s:s + chunk, 0] = np.sum(np.where(risky, -scale * proj * h, 0.0), axis=1)
@@ -167,21 +173,26 @@ def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0, ori
     Returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask, single).
     """
     check_backend(backend)
-    V, F, u, single = prepare(vertices, faces, up)
+    per_pose = np.ndim(up) == 2 and not isinstance(up, str)
+    V, F, u, single = prepare(vertices, faces, up[0] if per_pose else up)
+    if per_pose:  # (P, d): one direction per pose
+        u = np.asarray(up, np.float64)
+        u = np.ascontiguousarray(u / np.linalg.norm(u, axis=1, keepdims=True))
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
     if orient is None:
         orient = orientation_sign(V, F, backend)
     else:
         orient = np.broadcast_to(np.asarray(orient, np.float64), (V.shape[0],)).copy()
     if backend == "numpy":
-        out, mask = _numpy(V, F, u, orient, tau, float(floor))
-    elif V.shape[-1] == 3:
+        return (*_numpy(V, F, u, orient, tau, float(floor)), single)
+    U = np.ascontiguousarray(np.broadcast_to(u, (V.shape[0], V.shape[-1])))
+    if V.shape[-1] == 3:
         mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
-        out = _kernel3(V, F, u, orient, tau, mask, float(floor))
+        out = _kernel3(V, F, U, orient, tau, mask, float(floor))
     else:
         E = boundary_edges(F)
         mask = np.zeros((V.shape[0], E.shape[0]), np.bool_)
-        out = _kernel2(V, E, u, orient, tau, mask, float(floor))
+        out = _kernel2(V, E, U, orient, tau, mask, float(floor))
     return out, mask, single
 
 
@@ -259,9 +270,11 @@ def overhang_energy(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, b
     faces : (f, 3) int
         Consistently oriented triangles (closed surface in 3D; planar region
         in 2D, whose boundary edges are the surface).
-    up : str or (d,) array_like of float
+    up : str or (d,) array_like of float, or (P, d) float64
         Printing direction: ``"x"`` ... ``"-z"``, ``"0,1,0"`` or a vector
-        (:func:`supportless.energies.surface.prepare`).
+        (:func:`supportless.energies.surface.prepare`); or one per pose (a
+        turned pose ``V @ R.T`` measured along ``up`` is ``V`` measured
+        along ``R.T @ up``: the search passes that instead of turning).
     overhang_angle : float
         Threshold slope ``theta`` in degrees from the build plate (default:
         the default search's, 55.1); risky when ``n . up < -cos(theta)``.

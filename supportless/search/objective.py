@@ -92,6 +92,11 @@ HEAD_LIMIT = 25.0
 #: "Resting on an area".
 FOOTPRINT_MM2 = 3.0
 
+#: The search measures the self-intersection of the poses that could become the swarm's best this many at a time,
+#: the least costly by the other terms first (:meth:`Objective.bounded_overlap`): after each group, a pose whose
+#: other terms cost more than the least total measured is not measured.
+INTERSECT_CHUNK = 4
+
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
 #: larger than any pose that keeps them can cost.
 INFEASIBLE = 1e3
@@ -286,7 +291,12 @@ class Objective:
         rotations: support is counted on ``vertices @ R.T`` (the print frame,
         :mod:`supportless.search.orientation`); none = printed as the model stands.
         """
-        if rotations is not None:
+        up = self.rig.up
+        if rotations is not None and self.overhang_model == "prism" and np.ndim(vertices) == 3:
+            # V @ R.T measured along up is V measured along R.T @ up: no need to turn the poses
+            along = np.einsum("...ij,i->...j", np.asarray(rotations, np.float64), np.asarray(up, np.float64))
+            up = np.broadcast_to(along, (len(vertices), self.rig.dim))
+        elif rotations is not None:
             vertices = np.matmul(vertices, np.swapaxes(rotations, -1, -2))
         if self.overhang_model == "slicer":
             return predicted_support_mm(vertices, self.rig.faces, self.rig.up, self.overhang_angle,
@@ -295,7 +305,7 @@ class Objective:
             return support_volume(vertices, self.rig.faces, self.rig.up, self.overhang_angle, self.resolution,
                                   backend=self.backend)
         # the rig's surface is outward oriented and skinning and turning keep it so: no need to measure it
-        return overhang_energy(vertices, self.rig.faces, self.rig.up, self.overhang_angle, backend=self.backend,
+        return overhang_energy(vertices, self.rig.faces, up, self.overhang_angle, backend=self.backend,
                                floor=self.support_floor * self.height, orient=1.0)
 
     @cached_property
@@ -399,9 +409,9 @@ class Objective:
         R = np.broadcast_to(np.asarray(rotations, np.float64), (len(V), self.rig.dim, self.rig.dim))
         shortfall = np.zeros(len(V))
         turned = ~np.all(np.isclose(R, np.eye(self.rig.dim)), axis=(-2, -1))  # upright is the model as it stands
-        if np.any(turned):
-            printed = np.matmul(V[turned], np.swapaxes(R[turned], -1, -2))
-            area = footprint_area(printed, self.rig.faces, self.rig.up, self.print_height_mm / self.height)
+        if np.any(turned):  # V @ R.T measured along up is V measured along R.T @ up
+            along = np.einsum("pij,i->pj", R[turned], np.asarray(self.rig.up, np.float64))
+            area = footprint_area(V[turned], self.rig.faces, along, self.print_height_mm / self.height)
             shortfall[turned] = np.maximum(0.0, 1.0 - area / self.footprint_mm2)
         return shortfall
 
@@ -553,7 +563,12 @@ class Objective:
             their sum, without the self-intersection term (a lower bound
             that may be below ``bound``). The search passes the swarm's best
             value: only a pose that could become the swarm's best is
-            measured in full.
+            measured in full. Those are measured the least costly first,
+            :data:`INTERSECT_CHUNK` at a time; a pose whose other terms
+            reach the least total measured before it is not measured and
+            gets the larger of their sum and ``intersection_bound`` (it
+            cannot become the swarm's best: another pose of the batch costs
+            less).
 
         Returns
         -------
@@ -606,11 +621,34 @@ class Objective:
             kept[todo] = self.combine(self.normalise(partial))
             todo = todo[kept[todo] < np.minimum(bound[todo], intersection_bound)]
         if len(todo) and self.w_intersect != 0:
-            inter = np.asarray(self._intersection(V[todo]), np.float64)
-            overlap[keep[todo]] = inter
-            kept[todo] += self.intersection_cost(inter / self.volume)
+            if np.isfinite(intersection_bound):
+                measured = self._intersect_best_first(V, todo, kept, overlap, keep)
+                # the others cannot become the swarm's best: valued at or above it
+                rest = np.setdiff1d(todo, measured, assume_unique=True)
+                kept[rest] = np.maximum(kept[rest], intersection_bound)
+            else:
+                inter = np.asarray(self._intersection(V[todo]), np.float64)
+                overlap[keep[todo]] = inter
+                kept[todo] += self.intersection_cost(inter / self.volume)
         values[keep] = kept
         return values, overlap
+
+    def _intersect_best_first(self, V, todo, kept, overlap, keep) -> np.ndarray:
+        """Add the self-intersection cost to ``kept[todo]``, the least partial sums first, :data:`INTERSECT_CHUNK`
+        poses at a time, stopping where the partial sums reach the least total measured: a pose whose other terms
+        already cost that much cannot become the batch's best. Fills ``overlap[keep[...]]``; returns the measured
+        indices into ``kept`` (int64)."""
+        order = todo[np.argsort(kept[todo], kind="stable")]
+        least, done = np.inf, 0
+        while done < len(order) and kept[order[done]] < least:
+            chunk = order[done:done + INTERSECT_CHUNK]
+            chunk = chunk[kept[chunk] < least]
+            inter = np.asarray(self._intersection(V[chunk]), np.float64)
+            overlap[keep[chunk]] = inter
+            kept[chunk] += self.intersection_cost(inter / self.volume)
+            least = min(least, float(kept[chunk].min()))
+            done += len(chunk)
+        return order[:done]
 
     def __call__(self, angles: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
         """Objective value of a batch of poses: (P,) float64 (a 0-d array for one pose)."""

@@ -53,3 +53,22 @@ def test_a_batch_equals_its_single_calls_and_the_scale_goes_squared():
 def test_a_plane_past_the_surface_gives_zero():
     box = trimesh.creation.box([1.0, 1.0, 1.0])
     assert section_area(box.vertices, box.faces, [0, 0, 1], 5.0) == 0.0
+
+
+def test_a_turned_pose_measured_along_the_turned_up_is_the_pose_turned_and_manifolds_slice():
+    """Per-pose directions: ``V`` along ``R.T @ up`` equals ``V @ R.T`` along ``up``, and both equal the area of
+    manifold3d's slice of the turned surface (an independent method)."""
+    import manifold3d
+    blob = trimesh.creation.icosphere(3, radius=10.0)
+    blob.vertices *= [1.0, 0.6, 1.4]  # an ellipsoid: every turn rests on a different cap
+    up = np.array([0.0, 0.0, 1.0])
+    Rs = np.stack([_rotation(s) for s in range(6)])
+    above = np.linspace(0.5, 3.0, 6)
+    along = section_area(np.broadcast_to(blob.vertices, (6, *blob.vertices.shape)), blob.faces, Rs.transpose(0, 2, 1) @ up,
+                         above)
+    turned = blob.vertices @ Rs.transpose(0, 2, 1)  # (6, n, 3): each pose turned by its R
+    np.testing.assert_allclose(along, section_area(turned, blob.faces, up, above), rtol=1e-9)
+    for V, h, area in zip(turned, above, along):
+        solid = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(V, np.float32),
+                                                    tri_verts=np.asarray(blob.faces, np.uint32)))
+        assert area == pytest.approx(solid.slice(float(V[:, 2].min() + h)).area(), rel=1e-4)  # float32 there

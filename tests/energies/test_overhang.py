@@ -258,3 +258,22 @@ def test_a_given_winding_equals_the_measured_one():
     np.testing.assert_allclose(overhang_energy(batch, F[:, ::-1], "y", orient=-winding),
                                overhang_energy(batch, F[:, ::-1], "y"), rtol=1e-12)
     assert not np.allclose(overhang_energy(batch, F, "y", orient=-1.0), measured)
+
+
+@pytest.mark.parametrize("backend", ["fast", "numpy"])
+def test_one_direction_per_pose_measures_each_pose_as_if_turned(backend):
+    """``V`` along ``R.T @ up`` is ``V @ R.T`` along ``up`` (the search's turned poses), in 3D and 2D."""
+    V, F = tilted_arm_shape(30.0)
+    Rs = np.stack([rot_about(np.random.default_rng(s).normal(size=3), 0.4 * s) for s in range(5)])
+    batch = np.broadcast_to(V, (5, *V.shape))
+    along = overhang_energy(batch, F, Rs.transpose(0, 2, 1) @ UP, 50.0, backend=backend, floor=0.1)
+    turned = overhang_energy(V @ Rs.transpose(0, 2, 1), F, UP, 50.0, backend=backend, floor=0.1)
+    assert np.all(turned > 0) and np.ptp(turned) > 0
+    np.testing.assert_allclose(along, turned, rtol=1e-10)
+    V2, F2 = t_shape_2d()
+    turns = [np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]) for a in (0.0, 0.3, -0.5)]
+    up2 = np.array([0.0, 1.0])
+    along2 = overhang_energy(np.broadcast_to(V2, (3, *V2.shape)), F2, np.stack([R.T @ up2 for R in turns]), 50.0,
+                             backend=backend)
+    np.testing.assert_allclose(along2, [overhang_energy(V2 @ R.T, F2, up2, 50.0, backend=backend) for R in turns],
+                               rtol=1e-10)

@@ -203,7 +203,9 @@ def test_bounded_measures_each_term_only_where_the_cheaper_ones_leave_a_pose_bel
     assert np.all(got[~below] >= bound[~below]) and np.all(got[~below] <= exact[~below] + 1e-12)
 
 
-def test_the_self_intersection_is_measured_only_below_the_intersection_bound(rig, monkeypatch):
+def test_the_self_intersection_is_measured_only_where_a_pose_could_become_the_batchs_best(rig, monkeypatch):
+    from supportless.search.objective import INTERSECT_CHUNK
+
     obj = sl.Objective(rig)
     obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as raw_terms pose
     A = random_angles(rig, 30, scale=1.5, seed=11)
@@ -216,12 +218,27 @@ def test_the_self_intersection_is_measured_only_below_the_intersection_bound(rig
     monkeypatch.setattr(obj, "_intersection", lambda V: measured.append(len(V)) or intersection(V))
     values, overlap = obj.bounded_overlap(A, np.full(30, np.inf), intersection_bound=cut)
     below = others < cut
-    assert measured == [int(below.sum())]
-    np.testing.assert_allclose(values[below], exact[below], rtol=1e-12)
+    assert all(1 <= k <= INTERSECT_CHUNK for k in measured)
+    count = sum(measured)
+    assert 1 <= count < below.sum()  # some poses below the bound are not measured
+    # the least costly by the other terms first, until they cost as much as the least total measured
+    first = np.argsort(np.where(below, others, np.inf), kind="stable")[:count]
+    was = np.zeros(30, bool)
+    was[first] = True
+    np.testing.assert_allclose(values[was], exact[was], rtol=1e-12)
+    least = exact[was].min()
+    assert np.all(others[below & ~was] >= least)
+    # the batch's best is the one a measure of every pose below the bound finds
+    assert least == pytest.approx(exact[below].min(), rel=1e-12)
+    # the others cannot become the swarm's best: valued at or above the bound, never above their sum of terms
+    np.testing.assert_allclose(values[below & ~was], np.maximum(others[below & ~was], cut), rtol=1e-12)
     np.testing.assert_allclose(values[~below], others[~below], rtol=1e-12)  # without the self-intersection
-    assert np.all(overlap[~below] == 0)
-    assert np.any(~below & (terms["intersection"] > 0))  # some of those do overlap: their values are lower bounds
-    assert np.any(below & (terms["intersection"] > 0))
+    assert np.all(overlap[~was] == 0)
+    assert np.any(was & (terms["intersection"] > 0))  # a measured pose does overlap
+    # without a bound every pose below its own bound is measured, at once
+    measured.clear()
+    np.testing.assert_allclose(obj.bounded(A, np.full(30, np.inf)), exact, rtol=1e-12)
+    assert measured == [30]
 
 
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
