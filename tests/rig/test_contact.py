@@ -140,3 +140,19 @@ def test_a_united_file_is_written_on_the_plate(tpose_rig, tmp_path, monkeypatch)
     W, G = sl.read_mesh(tmp_path / "posed.stl")
     assert W[:, 2].min() == pytest.approx(0.0, abs=1e-6)
     assert len(intersecting_faces(W, G)) == 0
+
+
+@pytest.mark.parametrize("pose", [ARM_DOWN, HAND_TO_HEAD])
+def test_the_depth_scan_finds_the_depths_a_tree_per_part_finds(tpose_rig, pose, monkeypatch):
+    """The compiled scan of every triangle (a few vertices inside) against libigl's distance tree per part."""
+    from supportless.rig import contact
+
+    A = turned(tpose_rig, pose)
+    V, parts = tpose_rig.pose(A), tpose_rig.body_parts
+    bones = np.arange(tpose_rig.bone_count)
+    scanned = contact._deepest(parts, V, bones)
+    monkeypatch.setattr(contact, "SCAN_BUDGET", 0)
+    tree = contact._deepest(parts, V, bones)
+    assert scanned and scanned.keys() == tree.keys()
+    for key in tree:
+        assert scanned[key] == pytest.approx(tree[key], rel=1e-9, abs=1e-12)
