@@ -29,8 +29,9 @@ from ..rig.rig import Rig
 from ..rig.contact import ContactRules
 from .anatomy import bone_part, joint_ranges
 from .relaxed import arm_drops
-from .objective import (CHAIN_LIMIT, FOOTPRINT_MM2, HEAD_LIMIT, JOINT_LIMIT, OVERHANG_MODELS, W_ARAP, W_CHAIN,
-                        W_INTERSECT, W_OVERHANG, W_PRIOR, Objective, distortion)
+from .objective import OVERHANG_MODELS, Objective, distortion
+from .weights import (CHAIN_LIMIT, FOOTPRINT_MM2, HEAD_LIMIT, JOINT_LIMIT, W_ARAP, W_CHAIN, W_INTERSECT, W_OVERHANG,
+                      W_PRIOR)
 
 __all__ = ["AUTO", "DEFAULT_OVERHANG_ANGLE", "ORIENT_MODES", "ORIENT_SEEDS", "OVERHANG_MARGIN", "RANGES", "SearchSettings",
            "angle_layout", "bone_index", "resolve_fixed_bones"]
