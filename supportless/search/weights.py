@@ -20,7 +20,8 @@ W_PRIOR = 0.3
 W_CONTACT = 5.0
 #: Weight of the chain ends' squared world turn in the prior
 #: (:meth:`~supportless.search.objective.Objective.prior_cost`). Chosen on the zoo and the shared models with
-#: PrusaSlicer (benchmarks/RESULTS.md, "The chain limit"): with the 60-degree chain limit, 0.03 gave zoo 65.2 % (65.7 % at 0), bunny 54.3 % (41.4 %), bb-bunny 44.3 % (41.4 %), smaller turns.
+#: PrusaSlicer (benchmarks/RESULTS.md, "The chain limit"): with the 60-degree chain limit, 0.03 gave
+#: zoo 65.2 % (65.7 % at 0), bunny 54.3 % (41.4 %), bb-bunny 44.3 % (41.4 %), smaller turns.
 W_CHAIN = 0.03
 
 #: Default largest rotation of a joint, degrees (one angle). Chosen on the zoo and
