@@ -96,6 +96,30 @@ def test_posing_updates_measures_and_latency(app, rig):
     assert "Objective:" in app.panel.measures.content
 
 
+def test_the_exact_crossings_follow_the_energies_unless_another_edit_waits(app, rig):
+    from supportless.copyleft.cgal import intersecting_faces
+
+    app.reset()
+    assert app.wait_idle()
+    b = rig.bone_count - 1
+    app.state.set_bone_angles(b, [0.0, 0.0, 150.0])  # the branch's last bone folded back into the one before
+    assert app.wait_idle()
+    angles = app.state.get_angles()
+    pairs = intersecting_faces(rig.pose(angles), rig.faces)
+    assert len(pairs) > 0  # the fold does cross: the check has something to find
+    assert app.measures["intersecting_face_pairs"] == len(pairs)
+    np.testing.assert_array_equal(app.measures["intersecting_faces"], np.unique(pairs))
+    assert app.latency_ms["exact"] >= app.latency_ms["full"]
+    assert "crossings" in app.panel.measures.content and "checking" not in app.panel.measures.content
+    # a drawing that another edit already replaces leaves the crossings to that one's
+    with app._swap:
+        app._draw(0.0, app._requested - 1)
+    assert app.measures["intersecting_faces"] is None and "exact" not in app.latency_ms
+    assert "self-intersecting: checking…" in app.panel.measures.content
+    app.reset()
+    assert app.wait_idle()
+
+
 def test_undo_redo_reset(app, rig):
     app.reset()
     app.wait_idle()

@@ -95,7 +95,7 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
     settings : SearchSettings
         The settings that objective belongs to (weights, thresholds).
     latency : dict
-        ``mesh`` and ``full`` update times, ms.
+        ``mesh`` and ``full`` update times, ms, and ``exact`` once the crossings are found.
     dim : int
         2 for a planar rig.
     scale : float
@@ -108,7 +108,7 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
     """
     t = m["terms"]
     inter = m.get("intersecting_faces")
-    inter_txt = ("not checked (2D)" if dim == 2 else "n/a" if inter is None
+    inter_txt = ("not checked (2D)" if dim == 2 else "checking…" if inter is None
                  else f"{len(inter)} faces" + (" (magenta)" if len(inter) else ""))
     red = m.get("reduction", {})
     turned = abs(m["turn_deg"]) >= 0.05
@@ -131,7 +131,8 @@ def measures_markdown(m: dict, settings: SearchSettings, latency: dict, dim: int
         f"- ARAP term: {_fmt(t['arap'])} (× {settings.w_arap:g}) · overhang term: {_fmt(t['overhang'])} "
         f"(× {settings.w_overhang:g}, faces past {settings.search_overhang_angle:.3g}°) · intersection term: "
         f"{_fmt(t['intersection'])} (× {settings.w_intersect:g})",
-        f"- Update time: mesh {latency.get('mesh', 0):.1f} ms · with energies {latency.get('full', 0):.1f} ms",
+        f"- Update time: mesh {latency.get('mesh', 0):.1f} ms · with energies {latency.get('full', 0):.1f} ms"
+        + (f" · crossings {latency['exact']:.1f} ms" if "exact" in latency else ""),
     ])
 
 

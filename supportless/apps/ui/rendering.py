@@ -4,9 +4,15 @@
 keeps the page responsive: an edit only asks for a redraw
 (:meth:`Rendering._request_render`); one thread draws the latest pose (a burst
 of slider events becomes one redraw) — the bone frames first, then the
-measures with the full weights, the overlays (risky faces, crossings, the
-support preview, the weak sections of :class:`~supportless.apps.ui.strength.StrengthOverlay`)
-and the panel's figures — and records how long it took (``latency_ms``).
+measures with the full weights, the overlays (risky faces, the support preview,
+the weak sections of :class:`~supportless.apps.ui.strength.StrengthOverlay`)
+and the panel's figures, and records how long it took (``latency_ms``: ``mesh``,
+``full``). Then, unless another edit is already waiting, the exact crossings
+(CGAL), the one measure that can take longer than a frame on a large body
+(an edit of the spine of a 40 000-triangle character: 130 ms): their faces and
+count are drawn when found (``latency_ms["exact"]``), the last pose's shown
+meanwhile, so a drag redraws at the energies' pace and the crossings follow
+when it pauses.
 """
 
 from __future__ import annotations
@@ -68,7 +74,7 @@ class Rendering:
                     return
                 version, t_in = self._requested, self._input_time
             try:
-                self._render(t_in)
+                self._render(t_in, version)
             except Exception as exc:  # noqa: BLE001 - keep serving
                 if self._stopping:
                     return
@@ -78,12 +84,17 @@ class Rendering:
                 self._rendered = max(self._rendered, version)
                 self._cond.notify_all()
 
-    def _render(self, t_in: float) -> None:
+    def _render(self, t_in: float, version: int) -> None:
         with self._swap:
             if self.state is not None:
-                self._draw(t_in)
+                self._draw(t_in, version)
 
-    def _draw(self, t_in: float) -> None:
+    def _newer_waiting(self, version: int) -> bool:
+        """Whether an edit came in after the one being drawn (``version``): its drawing replaces this one's."""
+        with self._cond:
+            return self._requested > version
+
+    def _draw(self, t_in: float, version: int) -> None:
         state, view, rig = self.state, dict(self.view), self.rig
         (angles, R), selected, fixed, settings = state.get_pose(), state.selected, state.fixed, state.settings
         if view["before"]:  # the rest pose, standing, for a look back
@@ -96,12 +107,17 @@ class Rendering:
                              locked=locked)
         t_mesh = time.perf_counter()
         V = rig.pose(angles) if V is None else V
-        m = state.measure(angles, rotation=R, exact=True, vertices=V)
+        m = state.measure(angles, rotation=R, exact=False, vertices=V)  # the crossings after the rest, below
         shown = V @ Q.T + shift
         weights = view["weights"]
         risky = m["risky"] if printed else m["risky_standing"]
-        self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
-                                 None if weights else m["intersecting_faces"], selected if weights else None)
+        crossings = getattr(self, "_crossings", None)  # the last pose's, until this one's are found
+
+        def overlays(inter):
+            self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
+                                     None if weights else inter, selected if weights else None)
+
+        overlays(crossings)
         if rig.dim == 3:
             self.scene.draw_support(support_columns(shown, rig.faces, rig.up, settings.overhang_angle,
                                                     PREVIEW_RESOLUTION) if view["show_support"] else None)
@@ -112,7 +128,18 @@ class Rendering:
         self._latencies = (self._latencies + [mesh_ms])[-50:]
         self.latency_ms = {"mesh": mesh_ms, "full": full_ms, "median_mesh": float(np.median(self._latencies))}
         rules = broken_rules(state.objective, angles) if m["terms"]["violation"] > 0 else []
-        text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules, lead)
-        text += self.strength.show(self.scene, state, angles, R, shown, view["show_strength"] and not weights)
-        self.panel.show_measures(("**Showing the rest pose (before)**\n\n" if view["before"] else "") + text)
+        head = "**Showing the rest pose (before)**\n\n" if view["before"] else ""
+        strength = self.strength.show(self.scene, state, angles, R, shown, view["show_strength"] and not weights)
+
+        def panel():
+            text = measures_markdown(m, settings, self.latency_ms, rig.dim, state.print_frame.scale, rules, lead)
+            self.panel.show_measures(head + text + strength)
+
+        panel()
+        if rig.dim == 3 and not self._newer_waiting(version):  # the exact crossings (CGAL) once the edits pause
+            m |= state.exact_measures(V)
+            self._crossings = m["intersecting_faces"]
+            overlays(self._crossings)
+            self.latency_ms["exact"] = 1e3 * (time.perf_counter() - t_in)
+            panel()
         self.panel.show_bone(selected, fixed, locked)

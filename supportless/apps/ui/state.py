@@ -232,12 +232,17 @@ class EditorState(PoseEditing, PoseFiles, BackgroundSearch):
                 "print_direction": print_direction(R, rig.up)}
         out["intersecting_faces"] = None
         if exact and rig.dim == 3:
-            pairs = self._exact_pairs(V)
-            out["intersecting_face_pairs"] = len(pairs)
-            out["intersecting_faces"] = np.unique(pairs)
+            out |= self.exact_measures(V)
         if rest is not None:
             out["reduction"] = {k: reduction(rest[k], out[k]) for k in REDUCED_MEASURES}
         return out
+
+    def exact_measures(self, V: np.ndarray) -> dict:
+        """The exact crossings of the posed surface ``V`` (n, 3) float64 (CGAL, :meth:`_exact_pairs`):
+        ``intersecting_face_pairs`` (int) and ``intersecting_faces`` ((k,) int64 faces in a pair), as
+        :meth:`measure` gives them with ``exact``."""
+        pairs = self._exact_pairs(V)
+        return {"intersecting_face_pairs": len(pairs), "intersecting_faces": np.unique(pairs)}
 
     def _exact_pairs(self, V: np.ndarray) -> np.ndarray:
         """The intersecting triangle pairs of the surface ``V`` (CGAL), asked only about what moved since the
