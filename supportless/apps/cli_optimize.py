@@ -53,7 +53,7 @@ def _run_search(rig, console, settings, quiet=False):
     stage("searching")
 
     from ..search.anatomy import joint_ranges
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
 
     progress = Progress(TextColumn("[bold]search[/bold] {task.fields[phase]}"), BarColumn(bar_width=16),
                         MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.fields[status]}"),
