@@ -18,8 +18,8 @@ the next; a stage adds its own typed record to it (the arrow), in the order they
 The stages after these are in later folders, since they need a slicer and the report: the slicer's
 choice among the answers (:func:`supportless.slicing.ranking.slice_choice`, which ends in
 :func:`as_written` again) and the report (:func:`supportless.report.report.build_report`, with the
-command's guard, :mod:`supportless.apps.rest_guard`). :func:`supportless.apps.cli_optimize.answer_of`
-runs the whole list for the ``optimize`` command.
+command's guard, :mod:`supportless.apps.rest_guard`). The ``optimize`` command runs the whole list in
+order; its module, :mod:`supportless.apps.cli_optimize`, lists it at the top.
 """
 
 from __future__ import annotations
