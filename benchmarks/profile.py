@@ -61,20 +61,20 @@ MODELS = {
 #: filled from the call (see :func:`_label`).
 STAGES = [
     ("supportless.rig.load", "load_rig", "load_rig (cold: tets, weights)"),
-    ("supportless.search.optimizer", "optimize", "optimize (whole search, every search)"),
-    ("supportless.search.optimizer", "_mirrored_or_free", "_mirrored_or_free (both searches of a mirrored figure)"),
-    ("supportless.search.optimizer", "_optimize", "_optimize [{which}] (one search + choose + as_written)"),
-    ("supportless.search.optimizer", "predicted_mm", "predicted_mm (mirrored vs free)"),
-    ("supportless.search.optimizer", "_search_proxy", "_search_proxy (proxy search + full-surface stages)"),
+    ("supportless.search.answer", "optimize", "optimize (whole search, every search)"),
+    ("supportless.search.answer", "mirrored_or_free", "mirrored_or_free (both searches of a mirrored figure)"),
+    ("supportless.search.answer", "one_answer", "one_answer [{which}] (one search + choose + as_written)"),
+    ("supportless.search.answer", "predicted_mm", "predicted_mm (mirrored vs free)"),
+    ("supportless.search.answer", "_on_proxy_then_full", "_on_proxy_then_full (proxy search + full-surface stages)"),
     ("supportless.search.optimizer", "_PoseSearch.run", "_PoseSearch.run"),
     ("supportless.search.optimizer", "_PoseSearch.run_phase", "run_phase [{phase}]"),
     ("supportless.search.optimizer", "_PoseSearch.polish", "_PoseSearch.polish"),
     ("supportless.search.optimizer", "_PoseSearch.result", "_PoseSearch.result"),
     ("supportless.search.objective", "Objective.forbidden", "exact self-intersection check (Objective.forbidden)"),
     ("supportless.search.objective", "Objective.terms", "progress terms (Objective.terms)"),
-    ("supportless.search.result", "on_full_surface", "on_full_surface"),
+    ("supportless.search.answer", "on_full_surface", "on_full_surface"),
     ("supportless.search.result", "at_full_resolution", "at_full_resolution"),
-    ("supportless.search.result", "as_written", "as_written"),
+    ("supportless.search.answer", "as_written", "as_written"),
     ("supportless.search.result", "written_verdict", "written_verdict (CGAL pairs)"),
     ("supportless.search.choice", "choose", "choose (weighing the answers)"),
     ("supportless.search.choice", "candidate_answers", "candidate_answers"),
@@ -91,7 +91,7 @@ STAGES = [
 def _label(template: str, args) -> str:
     if "{phase}" in template:  # run_phase(self, turns, initial, particles, offset, ..., label=...)
         return template.format(phase="pose and turn" if len(args) > 1 and args[1] else "pose")
-    if "{which}" in template:  # _optimize(rig, settings, ...)
+    if "{which}" in template:  # one_answer(rig, settings, ...)
         symmetric = getattr(args[1], "symmetric", None) if len(args) > 1 else None
         return template.format(which="mirrored" if symmetric else "free")
     return template
@@ -169,7 +169,8 @@ def _import_all():
     """Import the modules the CLI imports lazily, so the names imported from them are patched too."""
     for name in ("supportless.apps.cli_optimize", "supportless.apps.cli_common", "supportless.report.outputs",
                  "supportless.report.report", "supportless.slicing.ranking", "supportless.slicing.prusaslicer",
-                 "supportless.search.optimizer", "supportless.search.choice", "supportless.search.result",
+                 "supportless.search.answer", "supportless.search.optimizer", "supportless.search.choice",
+                 "supportless.search.result",
                  "supportless.rig.load"):
         importlib.import_module(name)
 
@@ -178,7 +179,7 @@ def warm(model: str) -> None:
     """Compile numba's functions on this model's rig (ordinary cache) with a tiny search."""
     _, load_args, _ = MODELS[model]
     rig = sl.load_rig(**load_args)
-    from supportless.search.optimizer import optimize
+    from supportless.search.answer import optimize
 
     optimize(rig, SearchSettings(particles=8, iterations=2))
 
@@ -241,7 +242,7 @@ def section(model: str, total: float, prof: Profiler, fl: dict) -> str:
     lines.append(f"| (outside every stage: CLI, printing, files) | | | | {_fmt_s(rest)} | {100 * rest / total:.1f} % |")
     lines.append(f"| **total** | | {_fmt_s(total)} | 100 % | | |")
     result = prof.returned.get("as_written") or prof.returned.get("optimize (whole search, every search)")
-    stats = {} if result is None else getattr(result, "stats", {})
+    stats = {} if result is None else result.flat_stats()
     own = {k: v for k, v in sorted(stats.items()) if k.endswith("_seconds") or k.endswith("_calls")}
     if own:
         lines += ["", "The package's own `result.stats` (of the answer kept): " + ", ".join(

@@ -17,7 +17,7 @@ import tempfile
 import numpy as np
 
 from supportless.apps.bench_targets import _prepare
-from supportless.search.optimizer import optimize
+from supportless.search.answer import optimize
 
 
 def main(out: str) -> None:
@@ -25,7 +25,7 @@ def main(out: str) -> None:
         rig = _prepare("bunny111k", cache)
     result = optimize(rig)
     np.save(out, result.print_vertices)
-    stats = {k: v for k, v in result.stats.items() if isinstance(v, (int, float, str))}
+    stats = {k: v for k, v in result.flat_stats().items() if isinstance(v, (int, float, str))}
     print(json.dumps({"angles": result.angles.tolist(), "rotation": result.rotation.tolist(), "value": result.value,
                       "stats": stats}))
 

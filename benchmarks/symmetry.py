@@ -30,7 +30,7 @@ import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.search.layout import find_mirror
 from supportless.search.naturalness import mirror_error_deg
-from supportless.search.optimizer import SYMMETRY_SHARE, predicted_mm
+from supportless.search.answer import SYMMETRY_SHARE, predicted_mm
 from supportless.slicing.prusaslicer import slice_check
 
 HEADING = "## Symmetry"

@@ -24,7 +24,8 @@ from .files.posefile import read_pose, write_pose
 from .rig.load import load_rig
 from .rig.rig import Rig, prepare_rig
 from .search.objective import Objective
-from .search.optimizer import PoseResult, optimize, particle_swarm
+from .search.answer import optimize
+from .search.optimizer import PoseResult, particle_swarm
 from .search.settings import SearchSettings
 from .shapes import DEMO_FIGURES, demo_figure
 

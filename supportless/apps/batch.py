@@ -237,7 +237,7 @@ def _pose_into(spec: ModelSpec, folder: Path, settings: dict, up, height_mm, cac
     from ..report.outputs import write_result
     from ..report.report import build_report, slicer_label, support_headline
     from ..rig.load import load_rig
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
     from ..search.settings import SearchSettings
 
     stage("preparing the rig")

@@ -9,7 +9,7 @@ call. For each model it times
 * ``one pose``: one call of the :class:`~supportless.search.objective.Objective` on a
   single pose (what the viewer does per edit);
 * ``one swarm iteration``: the objective on ``particles`` poses in one batch;
-* ``whole search``: :func:`supportless.search.optimizer.optimize` with the given swarm
+* ``whole search``: :func:`supportless.search.answer.optimize` with the given swarm
   size and iterations, including its exact (CGAL) intersection checks and the
   per-iteration terms of the best pose for the progress callback (their
   shares are printed below the table).
@@ -92,7 +92,7 @@ def random_poses(rig, count: int, max_angle: float = 30.0, seed: int = 0) -> np.
 
 
 def timed_search(rig, objective, settings) -> dict:
-    """Run :func:`supportless.search.optimizer.optimize` and split its wall time.
+    """Run :func:`supportless.search.answer.optimize` and split its wall time.
 
     Parameters
     ----------
@@ -108,11 +108,11 @@ def timed_search(rig, objective, settings) -> dict:
         ``stats``: the exact check's ``exact_seconds``/``exact_calls`` and the
         progress terms' ``progress_seconds``/``progress_calls``.
     """
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
 
     t = time.perf_counter()
     result = optimize(rig, settings, objective=objective)
-    return {"seconds": time.perf_counter() - t, "result": result, **result.stats}
+    return {"seconds": time.perf_counter() - t, "result": result, **result.stats.to_dict()}
 
 
 def bench_model(model, skeleton=None, up="auto", *, particles: int = SearchSettings.particles, iterations: int = SearchSettings.iterations,

@@ -165,7 +165,7 @@ def measure_case(case: str, reference: bool = False, settings=None, choice: bool
     import resource
     import time
 
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
     from ..search.settings import SearchSettings
 
     if case in BIG_CASES:
@@ -219,18 +219,19 @@ def _choice_times(rig, settings, result) -> dict:
     """Seconds of the pose-only search and of the choices after the default search (see :func:`measure_case`)."""
     import time
 
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
     from ..slicing.prusaslicer import find_prusa_slicer
     from ..slicing.ranking import SLICE_RANK, slice_choice
 
     t = time.perf_counter()
     optimize(rig, settings.replace(orient="keep"))
-    row = {"pose_only_s": time.perf_counter() - t, "choice_s": result.stats.get("choice_seconds", 0.0),
-           "chosen_kind": result.stats.get("chosen_kind")}
+    choice = result.choice
+    row = {"pose_only_s": time.perf_counter() - t, "choice_s": choice.seconds if choice is not None else 0.0,
+           "chosen_kind": choice.chosen_kind if choice is not None else None}
     if result.choice is not None and find_prusa_slicer():
         t = time.perf_counter()
         sliced = slice_choice(rig, result, SLICE_RANK, height_mm=REFERENCE_HEIGHT_MM)
-        row |= {"slice_s": time.perf_counter() - t, "sliced_kind": sliced.stats.get("chosen_kind"),
+        row |= {"slice_s": time.perf_counter() - t, "sliced_kind": sliced.choice.chosen_kind,
                 "sliced": sum(c.sliced_mm is not None for c in sliced.choice.candidates)}
     return row
 

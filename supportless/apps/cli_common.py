@@ -148,7 +148,7 @@ _WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EP
 
 def _search_options(f):
     """The search's options; their defaults are :class:`~supportless.search.settings.SearchSettings`'s."""
-    from ..search.optimizer import SYMMETRY_SHARE
+    from ..search.answer import SYMMETRY_SHARE
     from ..search.settings import RANGES, SearchSettings
 
     d = SearchSettings()

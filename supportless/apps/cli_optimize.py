@@ -1,10 +1,20 @@
 """``supportless optimize``: a pose (and a print orientation) that needs less support, searched and written.
 
-The command in named steps: the search (:func:`_run_search`, or the front of
-:func:`_run_front`), the slicer's choice among the best answers
-(:func:`_slice_choice`), the files written (:func:`_write_outputs`) and, with
-``--slice-check``, the slicer's figures for the written file
-(:func:`_slice_and_report`). ``demo`` runs the same steps on a built-in figure.
+The command runs the answer's stages in order, each a named function:
+
+1. searched         :func:`_run_search`: :func:`supportless.search.answer.optimize`, whose own stages
+                    (on the proxy, on the full surface, polished, chosen by the slicer model, checked as
+                    written) are listed at the top of :mod:`supportless.search.answer`; or the front of
+                    :func:`_run_front` (``--pareto``)
+2. sliced           :func:`_slice_choice`: the slicer's choice among the best answers
+                    (:func:`supportless.slicing.ranking.slice_choice`, checked as written again)
+3. reported         :func:`_reported`: the report (:func:`supportless.report.report.build_report`), the rest
+                    pose instead when the slicer model predicts the answer needs more support
+4. written          :func:`_write_outputs`
+5. slice-checked    with ``--slice-check``, :func:`_slice_and_report`: the slicer's figures for the written
+                    file, the rest pose written instead when the slicer lays more support under the answer
+
+``demo`` runs the same steps on a built-in figure.
 """
 
 from __future__ import annotations
@@ -53,7 +63,7 @@ def _run_search(rig, console, settings, quiet=False):
     stage("searching")
 
     from ..search.anatomy import joint_ranges
-    from ..search.optimizer import optimize
+    from ..search.answer import optimize
 
     progress = Progress(TextColumn("[bold]search[/bold] {task.fields[phase]}"), BarColumn(bar_width=16),
                         MofNCompleteColumn(), TimeElapsedColumn(), TextColumn("{task.fields[status]}"),
@@ -178,30 +188,27 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     _say_frame(rig, frame, quiet)
     settings = settings.replace(print_height_mm=frame.height_mm)  # the plate contact is judged at the printed size
     with deferred_interrupt(), listening(_announce(console, quiet)):  # Ctrl-C stops the search; what it found is still written
+        # 1. searched
         front = _run_front(rig, console, settings, pareto_count, pareto_method, quiet) if pareto_count else None
         result = front.default if front else _run_search(rig, console, settings, quiet)
         if result.interrupted:
             console.print("[yellow]stopped early: writing the best pose found so far[/yellow]")
         extra = {"printer_profile": profile.summary()}
         sliced = False
-        if not result.interrupted and front is None:
+        if not result.interrupted and front is None:  # 2. sliced
             result, sliced = _slice_choice(rig, result, slice_rank_count, console, profile, frame, quiet, choice)
         if front is not None:
             from .pareto import write_front
 
             extra["pareto"], front_written = write_front(rig, front, output, frame)
             extra["pareto_seconds"] = front.seconds
-        with step("measuring the report (rest and found pose)"):
-            report = build_report(rig, result, frame) | extra
-            if not slice_check_flag and predicted_worse(report):  # without a slicer, the prediction guards
-                result = rest_instead(rig, result, "the slicer model's prediction")
-                report = build_report(rig, result, frame) | extra
+        result, report = _reported(rig, result, frame, extra, guard=not slice_check_flag)  # 3. reported
         outputs, more = (output, pose, report_path, pictures, frame), {"upright": upright_out, "standing": standing_out}
-        written, failed = _write_outputs(rig, result, report, *outputs, **more)
+        written, failed = _write_outputs(rig, result, report, *outputs, **more)  # 4. written
         if front is not None:
             written += front_written
     stopped = result.interrupted or interrupt_requested()
-    for attempt in (0, 1) if slice_check_flag and not failed and not stopped else ():  # the slicer's word leads
+    for attempt in (0, 1) if slice_check_flag and not failed and not stopped else ():  # 5. slice-checked
         report = _slice_and_report(rig, result, report, report_path, console, frame, output, profile=profile,
                                    choice=choice)
         if attempt or not sliced_worse(report):
@@ -220,6 +227,21 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     if stopped:
         click.echo("supportless: interrupted: the best pose found so far is written", err=True)
         sys.exit(EXIT_INTERRUPTED)
+
+
+def _reported(rig, result, frame, extra: dict, guard: bool):
+    """The report of ``result`` (:func:`supportless.report.report.build_report` with ``extra`` added); with
+    ``guard`` (no slicer to check the written file), the rest pose in place of an answer the slicer model
+    predicts needs more support than it (:func:`supportless.apps.rest_guard.predicted_worse`).
+    Returns ``(result, report)``."""
+    from ..report.report import build_report
+
+    with step("measuring the report (rest and found pose)"):
+        report = build_report(rig, result, frame) | extra
+        if guard and predicted_worse(report):
+            result = rest_instead(rig, result, "the slicer model's prediction")
+            report = build_report(rig, result, frame) | extra
+    return result, report
 
 
 def _announce(console, quiet: bool):

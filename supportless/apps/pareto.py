@@ -48,7 +48,8 @@ from ..energies.slicer_model import predicted_support_mm
 from ..files.printframe import REFERENCE_HEIGHT_MM, PrintFrame, rig_print_frame
 from ..rig.rig import Rig
 from ..search.layout import PoseLayout, require_mirror
-from ..search.optimizer import TURN_SHARE, PoseResult, measured_at, optimize, pose_distance_deg
+from ..search.answer import optimize
+from ..search.optimizer import TURN_SHARE, PoseResult, measured_at, pose_distance_deg
 from ..search.orientation import orientation_params, rotations_from_params
 from ..search.settings import SearchSettings
 

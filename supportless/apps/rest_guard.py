@@ -32,7 +32,7 @@ def sliced_worse(report: dict) -> bool:
 
 
 def rest_instead(rig, result, by: str):
-    """The rest pose, standing as the input stood, in place of ``result``; ``stats["rest_instead"]`` says why.
+    """The rest pose, standing as the input stood, in place of ``result``; its ``rest_instead`` says why.
 
     Parameters
     ----------
@@ -49,19 +49,20 @@ def rest_instead(rig, result, by: str):
 
     rest = measured_at(rig, result, np.zeros_like(result.angles), np.eye(rig.dim))
     why = f"{by} found the answer needs more support than the rest pose"
-    return dataclasses.replace(rest, choice=None, stats=dict(result.stats, rest_instead=why, contacts=[]))
+    written = None if result.written is None else dataclasses.replace(result.written, contacts=[])
+    return dataclasses.replace(rest, choice=None, rest_instead=why, written=written)
 
 
 def fallback_warnings(rig, result) -> list[str]:
     """The lines that say the rest pose was written in place of the answer found, and why (none when not)."""
     lines = []
-    if result.stats.get("fell_back_to_rest"):
+    written = result.written
+    if written is not None and written.fell_back_to_rest:
         turned = not np.allclose(result.rotation, np.eye(rig.dim))
         lines.append(f"supportless: warning: {rig.name}: the pose found crosses itself as written "
-                     f"({result.stats['fell_back_to_rest']} triangle pairs"
-                     + (f": {result.stats['refused_as_written']}" if result.stats.get("refused_as_written") else "")
+                     f"({written.fell_back_to_rest} triangle pairs"
+                     + (f": {written.refused_as_written}" if written.refused_as_written else "")
                      + f"); the rest pose{', turned,' if turned else ''} is written instead")
-    if result.stats.get("rest_instead"):
-        lines.append(f"supportless: warning: {rig.name}: {result.stats['rest_instead']}; the rest pose is written "
-                     "instead")
+    if result.rest_instead:
+        lines.append(f"supportless: warning: {rig.name}: {result.rest_instead}; the rest pose is written instead")
     return lines

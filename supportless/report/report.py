@@ -213,7 +213,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     after = pose_measures(objective, result.angles, exact=not reduced, overhang_angle=angle, rotation=R)
     if reduced and rig.dim == 3:  # the exact counts are the full surface's: the rest pose's and the file's
         for measures, key, V in ((before, "rest_pairs", rig.vertices), (after, "written_pairs", result.print_vertices)):
-            measures["intersecting_face_pairs"] = result.stats.get(key, None)
+            measures["intersecting_face_pairs"] = getattr(result.written, key, None)  # None before the last gate
             if measures["intersecting_face_pairs"] is None:
                 measures["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
     axis, degrees = rotation_axis_angle(R)
@@ -279,7 +279,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     report["contacts"] = contact_summary(rig, result, frame)
     report["footprint"] = footprint_summary(rig, result, frame)
     report["strength"] = strength_summary(rig, result, frame)
-    report["rest_instead"] = result.stats.get("rest_instead")  # why the rest pose was written, when it was
+    report["rest_instead"] = result.rest_instead  # why the rest pose was written, when it was
     report["standing"] = standing_answer(result)
     report["skinning"] = skinning_label(rig)
     report["support"] = support_headline(report)
@@ -395,7 +395,7 @@ def contact_summary(rig, result, frame: PrintFrame) -> list[dict]:
         pairs), ``depth`` (deepest press, in the thinner part's thicknesses) and ``overlap_mm3`` (the volume
         the whole body covers twice, at the print's scale, on the first only; the written file merges it).
     """
-    regions = result.stats.get("contacts") or []
+    regions = result.written.contacts if result.written is not None else []
     if not regions or rig.dim != 3:
         return []
     names = rig.bone_names()

@@ -317,7 +317,7 @@ class Rig:
         (:func:`~supportless.files.simplify.quickly_reduced`: closed, uncrossed), weighted as the full
         surface is (from the model's skin, or from the proxy's bounded biharmonic weights); the same joints,
         volume mesh and proxy. What is written is the full surface
-        posed, checked exactly there (:func:`supportless.search.result.as_written`). Made once per rig.
+        posed, checked exactly there (:func:`supportless.search.answer.as_written`). Made once per rig.
         """
         from ..files.simplify import FAST_FIRST_FACES
 

@@ -135,6 +135,8 @@ class Choice:
         ``changed_choice`` (the slicer model would have chosen one of them); None when strength was not weighed.
     refused : list of Candidate
         The answers left out for strength, with their safety factors.
+    seconds : float
+        Wall time the slicer model's choice took (:func:`choose`), s.
     """
 
     candidates: list[Candidate]
@@ -149,10 +151,16 @@ class Choice:
     model_chosen: int = -1
     strength: dict | None = None
     refused: list = field(default_factory=list)
+    seconds: float = 0.0
 
     def __post_init__(self):
         if self.model_chosen < 0:
             self.model_chosen = self.chosen
+
+    @property
+    def chosen_kind(self) -> str:
+        """The kind of the answer chosen, one of :data:`KINDS`."""
+        return self.candidates[self.chosen].kind
 
     def to_dict(self) -> dict:
         """The candidates and the choice as JSON values (for the report)."""
@@ -440,7 +448,7 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
     -------
     chosen : PoseResult
         One of the candidates, with :attr:`PoseResult.choice` saying how it
-        was chosen; the search's history, stats and time are kept.
+        was chosen (and how long that took, ``choice.seconds``); the search's history, stats and time are kept.
     """
     t0 = time.perf_counter()
     candidates, rest_mm, strength = candidate_answers(rig, result, per_kind, height_mm)
@@ -463,12 +471,11 @@ def choose(rig: Rig, result: PoseResult, per_kind: int = PER_KIND, tolerance: fl
     weighed = strength_record(strength, candidates, index, rest_mm, tolerance)
     if weighed and weighed["changed_choice"]:
         reason += f"; {weighed['changed_reason']}"
-    choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64),
-                    strength=weighed, refused=list(strength["refused"]) if strength else [])
-    chosen = with_choice(candidates[index].result, choice)
     seconds = time.perf_counter() - t0
-    return dataclasses.replace(chosen, runtime_seconds=result.runtime_seconds + seconds,
-                               stats=dict(chosen.stats, choice_seconds=seconds))
+    choice = Choice(candidates, index, "model", reason, rest_mm, float(height_mm), up=np.asarray(rig.up, np.float64),
+                    strength=weighed, refused=list(strength["refused"]) if strength else [], seconds=seconds)
+    return dataclasses.replace(with_choice(candidates[index].result, choice),
+                               runtime_seconds=result.runtime_seconds + seconds)
 
 
 def strength_record(strength: dict | None, candidates: list[Candidate], index: int, rest_mm: float,
@@ -505,7 +512,7 @@ def crosses_as_written(rig: Rig, result: PoseResult, rest_pairs: int) -> bool:
     checks off).
 
     A pose the search checked on a simplified proxy can cross itself on the full surface; so can a turn's
-    rounding turn a touch into a crossing. :func:`supportless.search.result.as_written` would replace such an
+    rounding turn a touch into a crossing. :func:`supportless.search.answer.as_written` would replace such an
     answer by the rest pose, so the choice passes it over for the next best instead.
     """
     if rig.dim != 3 or not result.settings.exact_intersections:
@@ -526,6 +533,5 @@ def best_standing(choice: Choice) -> int | None:
 
 
 def with_choice(result: PoseResult, choice: Choice) -> PoseResult:
-    """``result`` carrying ``choice`` (and a ``chosen_kind`` stat)."""
-    kind = choice.candidates[choice.chosen].kind
-    return dataclasses.replace(result, choice=choice, stats=dict(result.stats, chosen_kind=kind))
+    """``result`` carrying ``choice``."""
+    return dataclasses.replace(result, choice=choice)

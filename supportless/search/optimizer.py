@@ -1,12 +1,13 @@
-"""The search of a rig's pose: :func:`optimize`, in named steps.
+"""One search of a rig's pose: :class:`_PoseSearch`, its phases, the exact gate of would-be bests and the polish.
 
-:func:`optimize` searches the Euler angles of a rig's free bones with an
-optimiser of :mod:`supportless.search.swarm` (and, with ``orient="free"``,
-the print rotation: two more variables in 3D, one in 2D, in a second swarm,
-see :data:`TURN_SHARE`) and returns a :class:`PoseResult`. A dense surface is
-searched on its simplified proxy and polished on the full one
-(:func:`_search_proxy`); one search is a :class:`_PoseSearch`: its phases, the
-exact gate of would-be bests, the polish and the result.
+A search finds the Euler angles of a rig's free bones with an optimiser of
+:mod:`supportless.search.swarm` (and, with ``orient="free"``, the print
+rotation: two more variables in 3D, one in 2D, in a second swarm, see
+:data:`TURN_SHARE`) and returns a :class:`PoseResult` with its
+:class:`~supportless.search.result.SearchStats`. The answer's stages
+(:mod:`supportless.search.answer`, whose :func:`~supportless.search.answer.optimize`
+is the tool's search) run it on the rig, or on a dense surface's simplified
+proxy and then once more as the polish on the full surface.
 """
 
 from __future__ import annotations
@@ -18,24 +19,18 @@ from typing import Callable
 import numpy as np
 
 from ..base.geometry import place_on_plate, print_pose
-from ..base.interrupt import deferred_interrupt
-from ..base.progress import step
-from ..energies.slicer_model import predicted_support_mm
-from ..files.printframe import REFERENCE_HEIGHT_MM
 from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
-from .choice import choose
-from .layout import PoseLayout, find_mirror, require_mirror
-from .naturalness import mirror_error_deg
+from .layout import PoseLayout, require_mirror
 from .objective import Objective
 from .orientation import orientation_params, rotations_from_params, seed_params
 from .relaxed import relaxed_poses
-from .result import PoseResult, as_written, measured_at, on_full_surface
+from .result import PoseResult, SearchStats, measured_at
 from .settings import PSO_PRESETS, SearchSettings
 from .swarm import CMA_SHARE, OPTIMIZERS, OptimizerResult, evolution_strategy, particle_swarm
 
 __all__ = ["CANDIDATE_TOLERANCE", "CMA_SHARE", "DISTINCT_DEGREES", "OPTIMIZERS", "OptimizerResult", "PoseResult",
-           "TURN_SHARE", "distinct_candidates", "evolution_strategy", "measured_at", "optimize", "particle_swarm",
+           "TURN_SHARE", "distinct_candidates", "evolution_strategy", "measured_at", "particle_swarm",
            "pose_distance_deg"]
 
 #: With ``orient="free"`` the search runs the pose-only swarm, then a swarm of
@@ -53,227 +48,31 @@ TURN_SHARE = 2
 POLISH_SAMPLES = 16
 POLISH_SIGMA = 0.005
 
-#: The polish on the full surface after a proxy search (``SearchSettings.polish=None``) runs this many
-#: triangles x generations: its cost is about the same whatever the density (the 31 086-triangle character: 80
-#: generations, 1281 evaluations; the bunny subdivided twice, 111 456 triangles: 22).
-PROXY_POLISH_BUDGET = 2_500_000
-
 #: A ray-grid self-intersection volume above this share of the model's volume is taken as proof that a pose
 #: intersects itself (an embedded closed surface is nowhere two layers deep); the exact gate then skips CGAL.
 #: On the robot 767 of 1128 rejected candidates, on the tree 480 of 516, had such a volume; no accepted one had.
 OVERLAP_CERTAIN = 1e-9
 
-#: A figure whose rest skeleton has a mirror plane is posed as mirror images unless the free search's
-#: answer needs this share less predicted support than the mirrored one's (``SearchSettings.symmetric``
-#: None). Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Symmetry").
-SYMMETRY_SHARE = 0.10
-
-#: After the mirrored search, the free search starts from its answer (pose and turn) and runs this share of the
-#: iterations: it frees the pairs where that pays, from where the mirrored search ended, instead of searching the
-#: free space again from the rest pose (which kept its answer on none of the zoo's ten mirrored figures,
-#: benchmarks/RESULTS.md "Symmetry"; "Profile of the default answer" for the time it took).
-FREE_SHARE = 0.25
-
 # --------------------------------------------------------------------------- #
 # pose search
 # --------------------------------------------------------------------------- #
 class _Timed:
-    """Wraps a callable and sums its calls and wall time into ``stats``."""
+    """Wraps a callable and sums its calls and wall time into ``stats``' :class:`CallTime` named ``name``."""
 
-    def __init__(self, fn: Callable, stats: dict, name: str):
-        self.fn, self.stats, self.name = fn, stats, name
-        stats.setdefault(f"{name}_calls", 0)
-        stats.setdefault(f"{name}_seconds", 0.0)
+    def __init__(self, fn: Callable, stats: SearchStats, name: str):
+        self.fn, self.timing = fn, stats.timing(name)
 
     def __call__(self, *args):
         t = time.perf_counter()
         try:
             return self.fn(*args)
         finally:
-            self.stats[f"{self.name}_seconds"] += time.perf_counter() - t
-            self.stats[f"{self.name}_calls"] += 1
-
-
-def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Objective | None = None,
-             start: np.ndarray | None = None, start_rotation: np.ndarray | None = None,
-             callback: Callable[[int, dict], bool | None] | None = None,
-             intersects: Callable[[np.ndarray], bool] | None = None, **changes) -> PoseResult:
-    """Find a pose of ``rig`` that needs less support, with a particle swarm.
-
-    Parameters
-    ----------
-    rig : Rig
-    settings : SearchSettings, optional
-        What to search (default: ``SearchSettings()``, the tool's defaults).
-    objective : Objective, optional
-        Use this objective instead of ``settings.objective(rig)`` (e.g. one
-        whose ARAP operators are already computed).
-    start : (m, 3) float64, optional
-        A pose to start from (radians), e.g. one edited by hand: fixed bones
-        keep its angles, and it is one of the initial particles (with the
-        free bones' rest rotations as another), so the result is never worse
-        than the start pose.
-    start_rotation : (d, d) float64, optional
-        A print rotation to start from (with ``orient="free"``): the start
-        pose turned by it is one more initial particle, so a repeated search
-        is never worse than the pose and turn it starts from.
-    callback : callable, optional
-        ``callback(iteration, info)`` with ``info`` holding ``value``, ``terms``
-        (normalised terms of the best pose), ``angles``, ``rotation`` (the
-        print rotation), ``iterations`` (of the whole search, every phase and
-        the polish; it does not change) and ``phase`` ("pose", "pose and
-        turn" or "polish"); return ``False`` to stop.
-    intersects : callable, optional
-        The exact self-intersection check of the search's gate,
-        ``intersects(angles (m, 3) float64) -> bool`` (default:
-        :meth:`Rig.self_intersects`), asked only about would-be bests.
-    **changes
-        Settings to change from ``settings`` (``particles=50``, ``seed=1``, ...).
-
-    Returns
-    -------
-    result : PoseResult
-        Never worse than the rest pose (the rest pose is one of the particles).
-        With ``orient="free"`` in 3D and ``settings.choose`` (the default),
-        the answer with the least predicted slicer support among the
-        search's best, the best pose printed as it stands and the best turned
-        start pose (:func:`supportless.search.choice.choose`; its ``choice`` says
-        which and why). On Ctrl-C the search stops after the iteration under way and returns
-        its best so far with ``interrupted=True``
-        (:func:`supportless.base.interrupt.deferred_interrupt`).
-    """
-    settings = (settings or SearchSettings()).replace(**changes)
-    mirror = find_mirror(rig) if settings.symmetric is None and rig.dim == 3 else None
-    if mirror is not None and (start is None or mirror_error_deg(rig, np.asarray(start, np.float64).reshape(-1, 3),
-                                                                 mirror) < 1e-6):
-        # a start pose that breaks the mirror (one edited by hand) is searched freely: never worse than it
-        return _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects)
-    return _optimize(rig, settings.replace(symmetric=bool(settings.symmetric)), objective, start, start_rotation, callback, intersects)
-
-
-def _optimize(rig, settings, objective, start, start_rotation, callback, intersects) -> PoseResult:
-    """:func:`optimize` with the symmetry settled (``settings.symmetric`` True or False)."""
-    with deferred_interrupt():
-        t0 = time.perf_counter()
-        coarse = rig.coarse_rig() if objective is None else None
-        measure = rig
-        if coarse is not None:  # a dense surface: search its simplified proxy, then measure on the full one
-            measure = rig.measure_rig() or rig  # (a sculpt: on its surface reduced for measuring)
-            found = _search_proxy(measure, coarse, settings, start, start_rotation, callback, intersects, t0)
-        else:
-            found = _PoseSearch(rig, settings, objective or settings.objective(rig), start, start_rotation, callback,
-                                intersects).run(t0)
-        if found.alternatives and found.settings.choose and rig.dim == 3 and not found.interrupted:
-            with step("weighing the answers"):
-                found = choose(measure, found)
-    with step("exact self-intersection check as written"):
-        return as_written(rig, found)
-
-
-def _mirrored_or_free(rig, settings, objective, start, start_rotation, callback, intersects) -> PoseResult:
-    """Both searches of a figure with a mirror plane, and the mirrored answer unless the free one saves
-    :data:`SYMMETRY_SHARE` of its predicted support (``settings.symmetric`` None: the tool's choice).
-
-    The mirrored search runs first; the free one starts from its answer with :data:`FREE_SHARE` of the
-    iterations (the mirrored answer is one of its particles: never worse by the objective). The progress
-    counts both (``phase`` says which). The answer's ``symmetry`` holds both predictions and which was kept.
-    """
-    runs, seen = {}, {"it": 0, "offset": 0}
-    free_iterations = max(1, round(FREE_SHARE * settings.iterations))
-    for mirrored in (True, False):
-        inner = None if callback is None else _one_count(callback, seen, mirrored, settings.iterations,
-                                                        free_iterations)
-        if mirrored:
-            runs[True] = _optimize(rig, settings.replace(symmetric=True), objective, start, start_rotation, inner,
-                                   intersects)
-        else:
-            answer = runs[True]
-            runs[False] = _optimize(rig, settings.replace(symmetric=False, iterations=free_iterations), objective,
-                                    answer.angles, answer.rotation if settings.orient == "free" else start_rotation,
-                                    inner, intersects)
-        seen["offset"] = seen["it"]
-        if runs[mirrored].interrupted:
-            break
-    mirrored_mm = predicted_mm(rig, runs[True])
-    if False not in runs:
-        keep = runs[True]
-        free_mm = None
-    else:
-        free_mm = predicted_mm(rig, runs[False])
-        keep = runs[False] if free_mm < (1.0 - SYMMETRY_SHARE) * mirrored_mm else runs[True]
-    keep.symmetry = {"mode": "auto", "mirrored_mm": mirrored_mm, "free_mm": free_mm, "share": SYMMETRY_SHARE,
-                     "kept": "mirrored" if keep is runs[True] else "free",
-                     "runtime_seconds": sum(r.runtime_seconds for r in runs.values())}
-    keep.runtime_seconds = keep.symmetry["runtime_seconds"]
-    return keep
-
-
-def _one_count(callback, seen: dict, mirrored: bool, iterations: int, free_iterations: int):
-    """A callback for one of the two searches that reports to ``callback`` in one rising count (the mirrored
-    search runs ``iterations`` per swarm phase, the free one ``free_iterations``)."""
-    def inner(it, info):
-        seen["it"] = seen["offset"] + it
-        if mirrored and "total" not in seen:  # the first report is a swarm phase's: it knows the phases
-            seen["total"] = 2 * info["iterations"] - info["phases"] * (iterations - free_iterations)
-        total = seen["total"] if mirrored else seen["offset"] + info["iterations"]
-        word = "mirrored" if mirrored else "free"
-        return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
-    return inner
-
-
-def predicted_mm(rig: Rig, result: PoseResult) -> float:
-    """The slicer model's support filament of a result as printed, at the reference height, mm."""
-    up = np.asarray(rig.up, np.float64)
-    scale = REFERENCE_HEIGHT_MM / float(np.ptp(rig.vertices @ up))
-    return float(predicted_support_mm(result.print_vertices, rig.faces, up, float(result.settings.overhang_angle),
-                                      scale))
-
-
-def _search_proxy(rig: Rig, coarse: Rig, settings: SearchSettings, start, start_rotation, callback, intersects,
-                  t0: float) -> PoseResult:
-    """Search the simplified proxy of a dense surface, measure its answer on the full surface, then polish there.
-
-    The proxy shares the full rig's volume mesh, so its ARAP operators and its
-    volume; the polish runs CMA-ES on the full surface for about
-    :data:`PROXY_POLISH_BUDGET` triangles x generations (or
-    ``settings.polish``), and its pose is kept only when better.
-    """
-    full = settings.objective(rig)
-    polish = max(1, round(PROXY_POLISH_BUDGET / len(rig.faces))) if settings.polish is None else settings.polish
-    seen = {"iterations": 0}
-
-    def progress(offset, more):  # the proxy's iterations, then the polish's, counted as one search
-        def report(it, info):
-            seen["iterations"] = offset + it
-            return callback(offset + it, info | {"iterations": info["iterations"] + more})
-        return None if callback is None else report
-
-    proxy = settings.objective(coarse, full.arap_data, full.volume)
-    with step("searching on the proxy"):
-        found = _PoseSearch(coarse, settings.replace(polish=0), proxy, start, start_rotation, progress(0, polish),
-                            intersects, rests=full.rests).run(t0)
-    with step(f"measuring the best poses on {len(rig.faces)} triangles"):
-        chosen = on_full_surface(rig, found, full, t0)
-    if not polish or chosen.interrupted:
-        return chosen
-    with step(f"polishing on {len(rig.faces)} triangles"):
-        polished = _PoseSearch(rig, settings.replace(polish=polish), full, chosen.angles, chosen.rotation,
-                               progress(seen["iterations"], seen["iterations"]), intersects,
-                               polish_only=True).run(time.perf_counter())
-    stats = dict(chosen.stats, full_polish_value=polished.value,
-                 full_polish_evaluations=polished.stats["polish_evaluations"],
-                 full_exact_calls=chosen.stats["full_exact_calls"] + polished.stats.get("exact_calls", 0))
-    better = polished.value < chosen.value
-    return dataclasses.replace(measured_at(rig, chosen, polished.angles, polished.rotation, full) if better
-                               else chosen, stats=stats, interrupted=polished.interrupted,
-                               history=np.concatenate([chosen.history, polished.history[1:]]),
-                               runtime_seconds=time.perf_counter() - t0)
-
-
+            self.timing.seconds += time.perf_counter() - t
+            self.timing.calls += 1
 
 
 class _PoseSearch:
-    """One search of a rig's pose (and print rotation) for :func:`optimize`, in named steps.
+    """One search of a rig's pose (and print rotation) for :mod:`supportless.search.answer`, in named steps.
 
     :meth:`run` runs the phases (:meth:`phases`: the pose alone, then pose and
     turn with ``orient="free"``), the polish (:meth:`polish`) and assembles
@@ -293,7 +92,7 @@ class _PoseSearch:
         self.layout = PoseLayout(rig, settings.fixed_bones(rig), self.base, np.radians(settings.joint_limits(rig)),
                                  mirror)
         self.k = self.layout.count
-        self.stats: dict = {"overlap_rejections": 0}
+        self.stats = SearchStats()
         self.term_history: dict = {"arap": [], "overhang": [], "intersection": []}
         self.turning = settings.orient == "free"
         # orient="free": the pose alone first (the whole swarm, as "keep"), then pose and turn together with part
@@ -334,12 +133,12 @@ class _PoseSearch:
 
         def gate(x):
             if footprint_on and len(x) > k and not rests(x):
-                self.stats["footprint_rejections"] = self.stats.get("footprint_rejections", 0) + 1
+                self.stats.footprint_rejections += 1
                 return False
             if not exact_on:
                 return True
             if x.tobytes() in self.overlapping:  # the ray grid saw two layers: no need to ask CGAL
-                self.stats["overlap_rejections"] += 1
+                self.stats.overlap_rejections += 1
                 return False
             return not exact(x)
 
@@ -444,7 +243,7 @@ class _PoseSearch:
             if turned else np.zeros(0)])
         polished = self.run_phase(turned, x0[None], POLISH_SAMPLES * CMA_SHARE, settings.iterations * len(self.turns),
                                   optimizer="cma", iterations=self.polishing, sigma=POLISH_SIGMA, label="polish")
-        self.stats["polish_evaluations"] = polished.evaluations
+        self.stats.polish_evaluations = polished.evaluations
         history += list(polished.history if not history else polished.history[1:])
         if best is None or polished.value < best.value:
             keep = best if best is not None else polished  # the swarm's other good positions, if any
@@ -457,7 +256,6 @@ class _PoseSearch:
         """The whole search: phases, polish, result."""
         self._gate = self.feasible()
         best, history, turned, pose_best = self.phases()
-        self.stats["polish_evaluations"] = 0
         if self.polishing and not (best is not None and best.interrupted):
             best, history, turned = self.polish(best, history, turned)
         if best is None:  # nothing to move and nothing to turn

@@ -1,21 +1,19 @@
-"""A search's result, measured on the full surface and checked as it will be written.
+"""A search's answer as a typed record: :class:`PoseResult`, and what each stage adds to it.
 
-* :class:`PoseResult`: what :func:`supportless.search.optimizer.optimize` returns;
+* :class:`PoseResult`: what :func:`supportless.search.answer.optimize` returns;
+* the stages' records (each a field of the result, None until its stage ran):
+  :class:`SearchStats` (where one search's time went), :class:`FullSurface` (a proxy search's answer
+  measured on the full surface), :class:`WrittenCheck` (the last gate's count of the mesh as written);
 * :func:`measured_at`: a result moved to another pose and print rotation;
-* :func:`on_full_surface`: a result found on a simplified proxy, measured
-  and checked for exact self-intersection on the full surface;
 * :func:`at_full_resolution`: a result measured on a sculpt's reduced surface
   (:meth:`Rig.measure_rig`), posed on the full one;
-* :func:`as_written`: the last gate. The mesh that goes to the file (full
-  resolution, in the print frame) must not have more intersecting triangle
-  pairs than the rest pose; if it does, the rest pose is written instead
-  (turned, if turning alone lowers the objective), and ``stats`` says so.
+* :func:`written_verdict`: whether the mesh as written may be written (the stages that check it are in
+  :mod:`supportless.search.answer`).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,8 +25,137 @@ from ..rig.rig import Rig
 from .objective import Objective
 from .settings import SearchSettings
 
-__all__ = ["FULL_CHECKS", "PoseResult", "as_written", "at_full_resolution", "faces_of", "measured_at",
-           "on_full_surface", "written_verdict"]
+__all__ = ["CallTime", "FullSurface", "PoseResult", "SearchStats", "WrittenCheck", "at_full_resolution", "faces_of",
+           "measured_at", "written_verdict"]
+
+
+@dataclass
+class CallTime:
+    """The calls of one measured step of a search and their wall time.
+
+    Attributes
+    ----------
+    calls : int
+        How many times the step ran.
+    seconds : float
+        Their wall time together, s.
+    """
+
+    calls: int = 0
+    seconds: float = 0.0
+
+
+@dataclass
+class SearchStats:
+    """Where one search's time went (:class:`supportless.search.optimizer._PoseSearch`), counted while it runs.
+
+    Attributes
+    ----------
+    overlap_rejections : int
+        Candidates for the swarm's best rejected without asking CGAL: the ray grid saw two layers
+        (:data:`supportless.search.optimizer.OVERLAP_CERTAIN`).
+    exact : CallTime or None
+        CGAL checks of candidates for the swarm's best; None when the search had no gate.
+    footprint : CallTime or None
+        Checks of a turned candidate's contact with the plate; None when the search had no gate.
+    footprint_rejections : int
+        Candidates refused for resting on less plate than the footprint rule's bound.
+    progress : CallTime or None
+        Measures of the best pose's terms, once each time it changed; None when no phase ran.
+    polish_evaluations : int
+        Objective evaluations of the polish (CMA-ES with small steps), 0 without one.
+    """
+
+    overlap_rejections: int = 0
+    exact: CallTime | None = None
+    footprint: CallTime | None = None
+    footprint_rejections: int = 0
+    progress: CallTime | None = None
+    polish_evaluations: int = 0
+
+    def timing(self, name: str) -> CallTime:
+        """The :class:`CallTime` named ``name`` (``"exact"``, ``"footprint"`` or ``"progress"``), made on first use."""
+        if getattr(self, name) is None:
+            setattr(self, name, CallTime())
+        return getattr(self, name)
+
+    def to_dict(self) -> dict:
+        """The counts under the flat names benchmarks print (``exact_calls``, ``exact_seconds``, ...)."""
+        out = {"overlap_rejections": self.overlap_rejections}
+        for name in ("exact", "footprint", "progress"):
+            timing = getattr(self, name)
+            if timing is not None:
+                out |= {f"{name}_calls": timing.calls, f"{name}_seconds": timing.seconds}
+        if self.footprint_rejections:
+            out["footprint_rejections"] = self.footprint_rejections
+        return out | {"polish_evaluations": self.polish_evaluations}
+
+
+@dataclass(frozen=True)
+class FullSurface:
+    """A proxy search's answer on the full surface (:func:`supportless.search.answer.on_full_surface`, then
+    :func:`supportless.search.answer.polished`).
+
+    Attributes
+    ----------
+    proxy_faces : int
+        Triangles of the simplified proxy searched.
+    proxy_value : float
+        The proxy search's best objective value, measured on the proxy.
+    full_rescored : int
+        The proxy's best and other good poses (each copy once) measured on the full surface.
+    full_exact_calls : int
+        Exact self-intersection checks (CGAL) on the full surface: the measuring's, then the polish's gate's.
+    full_polish_value : float or None
+        The polish's best objective value on the full surface; None without a polish.
+    full_polish_evaluations : int or None
+        The polish's objective evaluations; None without a polish.
+    """
+
+    proxy_faces: int
+    proxy_value: float
+    full_rescored: int
+    full_exact_calls: int
+    full_polish_value: float | None = None
+    full_polish_evaluations: int | None = None
+
+    def to_dict(self) -> dict:
+        """The fields under their names, the polish's only when it ran."""
+        return {key: value for key, value in dataclasses.asdict(self).items() if value is not None}
+
+
+@dataclass(frozen=True)
+class WrittenCheck:
+    """The last gate's count of the mesh as written (:func:`supportless.search.answer.as_written`).
+
+    Attributes
+    ----------
+    written_pairs : int
+        Intersecting triangle pairs (CGAL) of the mesh written (full resolution, print frame).
+    rest_pairs : int
+        Intersecting triangle pairs of the rest pose.
+    contacts : list of dict
+        The contacts between jointed parts the written mesh keeps (:attr:`ContactVerdict.regions`:
+        ``bones``, ``pairs``, ``depth``); empty when it crosses itself nowhere beyond the rest pose.
+    fell_back_to_rest : int or None
+        When the rest pose is written instead of the answer: the pairs the answer had; else None.
+    refused_as_written : str or None
+        Why the answer was refused, in words, when the rest pose is written instead.
+    passed_over_as_written : int or None
+        When another answer weighed is written instead: the 1-based number of the answer passed over.
+    """
+
+    written_pairs: int
+    rest_pairs: int
+    contacts: list = field(default_factory=list)
+    fell_back_to_rest: int | None = None
+    refused_as_written: str | None = None
+    passed_over_as_written: int | None = None
+
+    def to_dict(self) -> dict:
+        """The fields under their names, those of a refusal only when set."""
+        return {key: value for key, value in dataclasses.asdict(self).items()
+                if value is not None or key == "refused_as_written" and self.fell_back_to_rest is not None}
 
 
 @dataclass
@@ -60,14 +187,8 @@ class PoseResult:
         Normalised terms of the best pose after each iteration.
     runtime_seconds : float
         Wall time of the search.
-    stats : dict
-        Where the time went: ``exact_calls``/``exact_seconds`` (CGAL checks
-        of candidates for the swarm's best), ``overlap_rejections``
-        (candidates rejected without CGAL, :data:`OVERLAP_CERTAIN`) and
-        ``progress_calls``/``progress_seconds`` (terms of the best pose per
-        iteration). A search on a proxy adds ``proxy_faces``, ``proxy_value``
-        (its best value on the proxy), ``full_rescored`` (candidates measured
-        on the full surface) and ``full_exact_calls`` (CGAL checks there).
+    stats : SearchStats
+        Where the search's time went (of the search that found the pose: the proxy's, after one).
     rotation : (d, d) float64
         The print rotation R (the identity with ``orient="keep"``).
     print_vertices : (n, d) float64
@@ -95,6 +216,16 @@ class PoseResult:
         filament at the reference height), ``share`` (what the free answer had
         to save), ``kept`` (``"mirrored"`` or ``"free"``) and
         ``runtime_seconds`` (both searches). None otherwise.
+    full_surface : FullSurface or None
+        How a proxy search's answer was measured and polished on the full surface; None without a proxy.
+    measured_faces : int or None
+        The triangles the answer was measured on, when that is not the rig's surface (a sculpt's reduced
+        surface, :func:`at_full_resolution`); else None.
+    written : WrittenCheck or None
+        The last gate's count of the mesh as written; None before it, or with exact checks off or in 2D.
+    rest_instead : str or None
+        Why the rest pose is written in place of the answer, when a command's guard found the answer needs more
+        support than the rest pose (:func:`supportless.apps.rest_guard.rest_instead`); else None.
 
     The JSON report of a result is built by its caller
     (:func:`supportless.report.report.build_report`): it measures the rest pose and
@@ -112,19 +243,35 @@ class PoseResult:
     fixed: np.ndarray | None = None
     term_history: dict = field(default_factory=dict)
     runtime_seconds: float = 0.0
-    stats: dict = field(default_factory=dict)
+    stats: SearchStats = field(default_factory=SearchStats)
     rotation: np.ndarray | None = None
     print_vertices: np.ndarray | None = None
     candidates: dict = field(default_factory=dict)
     alternatives: dict = field(default_factory=dict)
     choice: object = None
     symmetry: dict | None = None
+    full_surface: FullSurface | None = None
+    measured_faces: int | None = None
+    written: WrittenCheck | None = None
+    rest_instead: str | None = None
 
     def __post_init__(self):
         if self.rotation is None:
             self.rotation = np.eye(self.vertices.shape[1])
         if self.print_vertices is None:
             self.print_vertices = self.vertices
+
+    def flat_stats(self) -> dict:
+        """The stages' counts in one dict under flat names (``exact_calls``, ``proxy_faces``, ``written_pairs``,
+        ``chosen_kind``, ...), for benchmarks' tables; absent stages add nothing."""
+        out = self.stats.to_dict()
+        for record in (self.full_surface, self.written):
+            out |= record.to_dict() if record is not None else {}
+        if self.measured_faces is not None:
+            out["measured_faces"] = self.measured_faces
+        if self.choice is not None:
+            out |= {"chosen_kind": self.choice.chosen_kind, "choice_seconds": self.choice.seconds}
+        return out | ({"rest_instead": self.rest_instead} if self.rest_instead is not None else {})
 
 
 def measured_at(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.ndarray,
@@ -161,42 +308,12 @@ def measured_at(rig: Rig, result: PoseResult, angles: np.ndarray, rotation: np.n
                                print_vertices=print_pose(posed, rotation, rig.up) if turned else posed)
 
 
-#: How many of a proxy search's candidates are checked for exact intersections on the full surface at most.
-FULL_CHECKS = 10
-
-
-def on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:
-    """A result found on a rig's simplified proxy (:meth:`Rig.coarse_rig`), measured on the full surface.
-
-    The proxy's best and other good poses are re-scored on the full surface; with exact intersection checks the
-    best of the first :data:`FULL_CHECKS` whose full surface is clear is taken, the rest pose last.
-    """
-    stats = dict(found.stats, proxy_faces=len(found.objective.rig.faces), proxy_value=found.value, full_exact_calls=0)
-    A = np.concatenate([found.angles[None], found.candidates.get("angles", np.zeros((0,) + found.angles.shape))])
-    Q = np.concatenate([found.rotation[None], found.candidates.get("rotations", np.zeros((0,) + found.rotation.shape))])
-    first = np.sort(np.unique(np.hstack([A.reshape(len(A), -1), Q.reshape(len(Q), -1)]), axis=0,
-                              return_index=True)[1])  # copies of a pose once
-    A, Q = A[first], Q[first]
-    order = np.argsort(np.asarray(objective(A, Q)), kind="stable")
-    A, Q = A[order], Q[order]
-    stats["full_rescored"] = len(A)
-    angles, rotation = A[0], Q[0]
-    if found.settings.exact_intersections and rig.dim == 3:
-        for a, q in [*zip(A[:FULL_CHECKS], Q[:FULL_CHECKS]), (np.zeros_like(angles), Q[0])]:
-            stats["full_exact_calls"] += 1
-            if not objective.forbidden(a):
-                angles, rotation = a, q
-                break
-    measured = measured_at(rig, found, angles, rotation, objective)
-    return dataclasses.replace(measured, stats=stats, runtime_seconds=time.perf_counter() - t0)
-
-
 def at_full_resolution(rig: Rig, result: PoseResult) -> PoseResult:
     """``result`` posed on ``rig``'s surface, when it was measured on another (:meth:`Rig.measure_rig`).
 
     The pose, the print rotation, the value and the terms stay those measured; the surfaces
-    (``vertices``, ``print_vertices``) become ``rig``'s, and ``stats`` gains ``measured_faces``, the
-    triangles it was measured on. A result of ``rig``'s own surface is returned as it is.
+    (``vertices``, ``print_vertices``) become ``rig``'s, and ``measured_faces`` says how many triangles it
+    was measured on. A result of ``rig``'s own surface is returned as it is.
 
     Parameters
     ----------
@@ -213,14 +330,8 @@ def at_full_resolution(rig: Rig, result: PoseResult) -> PoseResult:
     posed = place_on_plate(rig.pose(result.angles), rig.up)
     turned = not np.allclose(result.rotation, np.eye(rig.dim))
     measured = len(result.objective.rig.faces) if result.objective is not None else None
-    return dataclasses.replace(result, vertices=posed, stats=dict(result.stats, measured_faces=measured),
+    return dataclasses.replace(result, vertices=posed, measured_faces=measured,
                                print_vertices=print_pose(posed, result.rotation, rig.up) if turned else posed)
-
-
-#: When the chosen answer crosses itself as written (a sculpt's, weighed on its reduced surface), this many of
-#: the other answers weighed are checked at full resolution, the best predicted (or sliced) first, before the
-#: rest pose is written instead.
-NEXT_ANSWERS = 3
 
 
 def written_verdict(rig: Rig, result: PoseResult, rest_pairs: int) -> ContactVerdict:
@@ -247,84 +358,9 @@ def written_verdict(rig: Rig, result: PoseResult, rest_pairs: int) -> ContactVer
     return contact_verdict(rig.body_parts, P, joints, pairs, rules, overlap, rig.rest_volume)
 
 
-def _next_clear_answer(rig: Rig, result: PoseResult, rest_pairs: int) -> PoseResult | None:
-    """The best of ``result.choice``'s other answers whose file crosses itself no more than the rest pose's
-    (:data:`NEXT_ANSWERS` at most, by the slicer's support when it chose, else the predicted), or None."""
-    choice = result.choice
-    if choice is None:
-        return None
-    sliced = choice.by == "slicer"
-
-    def support(c):
-        return c.sliced_mm if sliced else c.predicted_mm
-
-    others = sorted((i for i, c in enumerate(choice.candidates) if i != choice.chosen and support(c) is not None),
-                    key=lambda i: support(choice.candidates[i]))
-    for i in others[:NEXT_ANSWERS]:
-        answer = at_full_resolution(rig, choice.candidates[i].result)
-        verdict = written_verdict(rig, answer, rest_pairs)
-        written = verdict.pairs
-        if verdict.allowed:
-            why = (f"{choice.reason}; #{choice.chosen + 1} crossed itself at full resolution as written, "
-                   f"so #{i + 1}")
-            return dataclasses.replace(answer, choice=dataclasses.replace(choice, chosen=i, reason=why),
-                                       symmetry=result.symmetry, interrupted=result.interrupted,
-                                       stats=dict(answer.stats, written_pairs=written, rest_pairs=rest_pairs,
-                                                  contacts=verdict.regions, chosen_kind=choice.candidates[i].kind,
-                                                  passed_over_as_written=choice.chosen + 1))
-    return None
-
-
 def faces_of(rig: Rig, result: PoseResult) -> np.ndarray:
     """(f, 3) int64: the triangles of ``result``'s surfaces: ``rig``'s, or those of the surface it was
     measured on when that is not ``rig``'s (an answer a sculpt's choice weighed, :meth:`Rig.measure_rig`)."""
     if result.print_vertices.shape == rig.vertices.shape or result.objective is None:
         return rig.faces
     return result.objective.rig.faces
-
-
-def as_written(rig: Rig, result: PoseResult) -> PoseResult:
-    """``result`` if its mesh as written intersects itself no more than the rest pose, else the rest pose.
-
-    The exact count (CGAL) is taken on ``result.print_vertices`` with the
-    full-resolution faces: after any proxy, and after the print rotation,
-    whose rounding can turn a touch into a crossing. With exact intersection
-    checks off (``settings.exact_intersections``) or in 2D the result is
-    returned as it is.
-
-    Parameters
-    ----------
-    rig : Rig
-        Full resolution.
-    result : PoseResult
-        At full resolution or measured on the sculpt's reduced surface (posed at full resolution first,
-        :func:`at_full_resolution`).
-
-    Returns
-    -------
-    result : PoseResult
-        When it crosses itself more than the rest pose and was chosen among answers, the best of the other
-        answers that does not (:data:`NEXT_ANSWERS` tried; ``stats["passed_over_as_written"]`` names the
-        answer passed over). ``stats`` gains ``written_pairs`` and ``rest_pairs``; when the rest
-        pose replaced the result, ``fell_back_to_rest`` (the pairs the found
-        pose had) as well.
-    """
-    result = at_full_resolution(rig, result)
-    if rig.dim != 3 or not result.settings.exact_intersections:
-        return result
-    rest_pairs = len(intersecting_faces(rig.vertices, rig.faces))
-    verdict = written_verdict(rig, result, rest_pairs)
-    written = verdict.pairs
-    if verdict.allowed:
-        return dataclasses.replace(result, stats=dict(result.stats, written_pairs=written, rest_pairs=rest_pairs,
-                                                      contacts=verdict.regions))
-    if (other := _next_clear_answer(rig, result, rest_pairs)) is not None:
-        return other
-    rest = np.zeros_like(result.angles)
-    turned = measured_at(rig, result, rest, result.rotation)
-    upright = measured_at(rig, result, rest, np.eye(rig.dim))
-    chosen = turned if turned.value < upright.value else upright
-    pairs = len(intersecting_faces(chosen.print_vertices, rig.faces))
-    return dataclasses.replace(chosen, stats=dict(result.stats, written_pairs=pairs, rest_pairs=rest_pairs,
-                                                  fell_back_to_rest=written, refused_as_written=verdict.reason,
-                                                  contacts=[]))

@@ -144,7 +144,7 @@ class SearchSettings:
         Generations of a local CMA-ES after the swarm, from its best pose with
         small steps (:data:`supportless.search.optimizer.POLISH_SIGMA`); after a dense
         model's proxy search it runs on the full surface. None (the default):
-        :data:`supportless.search.optimizer.PROXY_POLISH_BUDGET` over the number of
+        :data:`supportless.search.answer.PROXY_POLISH_BUDGET` over the number of
         triangles after a proxy search (whose best is not quite the full
         surface's), none otherwise (on the bunny, at a353b18, 120 generations
         gained 0.4 % of the objective for 30 % more time).
@@ -213,10 +213,10 @@ class SearchSettings:
         (:mod:`supportless.search.layout`); False: pose each bone freely;
         None (the default): for a figure whose rest skeleton has a mirror
         plane, search mirrored, then freely from that answer
-        (:data:`supportless.search.optimizer.FREE_SHARE` of the iterations),
+        (:data:`supportless.search.answer.FREE_SHARE` of the iterations),
         and keep the mirrored pose unless the free
-        one needs :data:`supportless.search.optimizer.SYMMETRY_SHARE` less
-        predicted support (:func:`supportless.search.optimizer.optimize`); a
+        one needs :data:`supportless.search.answer.SYMMETRY_SHARE` less
+        predicted support (:func:`supportless.search.answer.optimize`); a
         start pose that breaks the mirror is searched freely.
     orient : {"free", "keep"}
         ``free``: search the print orientation with the pose (support is

@@ -28,7 +28,8 @@ from ..files.simplify import SLICE_FACES, reduced_alike
 from ..rig.rig import Rig
 from ..search.choice import KINDS, PER_KIND, Choice, choose, pool_of, print_distance_deg, with_choice
 from ..search.optimizer import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, PoseResult, distinct_candidates, measured_at
-from ..search.result import as_written, faces_of
+from ..search.answer import as_written
+from ..search.result import faces_of
 from .choice import SlicerChoice
 from .prusaslicer import DEFAULT_TIMEOUT_S, scale_for_height, slice_support
 
@@ -136,7 +137,7 @@ def slice_choice(rig: Rig, result: PoseResult, count: int = SLICE_RANK, *, heigh
     chosen : PoseResult
         With a :class:`~supportless.search.choice.Choice` by ``"slicer"`` (by
         ``"model"`` when only one answer was worth slicing: then nothing is
-        sliced), through :func:`supportless.search.result.as_written`.
+        sliced), through :func:`supportless.search.answer.as_written`.
 
     Raises
     ------

@@ -488,7 +488,7 @@ def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
             page.get_by_text(re.compile("search finished")).wait_for(timeout=300000)
             # two phases of 6 iterations for the mirrored search, and of FREE_SHARE of 6 for the free one from its
             # answer (the branch has a mirror plane)
-            from supportless.search.optimizer import FREE_SHARE
+            from supportless.search.answer import FREE_SHARE
 
             total = 2 * 6 + 2 * max(1, round(FREE_SHARE * 6))
             assert f"iteration {total} / {total}" in page.locator("body").inner_text()

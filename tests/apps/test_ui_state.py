@@ -14,7 +14,7 @@ from supportless.base.geometry import print_pose
 from supportless.base.kinematics import euler_to_matrix
 from supportless.files import posefile
 from supportless.report.report import pose_measures
-from supportless.search.optimizer import optimize
+from supportless.search.answer import optimize
 from supportless.search.orientation import print_direction, rotation_axis_angle, rotation_between
 from supportless.search.settings import SearchSettings
 
@@ -247,7 +247,7 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
     # orient="free" (the default): the pose-only phase and the turning phase, 4 iterations each, and the branch
     # has a mirror plane: the mirrored search and the free one from its answer (SearchSettings.symmetric None,
     # a share FREE_SHARE of the iterations)
-    from supportless.search.optimizer import FREE_SHARE
+    from supportless.search.answer import FREE_SHARE
 
     assert result.symmetry is not None
     total = 2 * 4 + 2 * max(1, round(FREE_SHARE * 4))

@@ -1032,7 +1032,7 @@ def test_a_gltf_with_an_external_bin_is_posed_into_a_glb(tmp_path, cache):
 def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, monkeypatch):
     """Over the proxy threshold a glTF rig gets a simplified volume and search surface; answers stay full size."""
     from supportless.rig import rig as rig_mod
-    from supportless.search.optimizer import optimize
+    from supportless.search.answer import optimize
 
     path = write_gltf(character(), tmp_path / "column.glb")
     plain = load(path, cache)
@@ -1049,7 +1049,7 @@ def test_a_dense_skinned_body_is_searched_through_its_proxy(tmp_path, cache, mon
     assert len(coarse.faces) <= len(F2) // 4
     np.testing.assert_allclose(dense.weights.sum(1), 1.0, atol=1e-9)
     result = optimize(dense, particles=8, iterations=2, orient="keep", polish=2)  # the polish is not the subject
-    assert result.vertices.shape == V2.shape and result.stats["proxy_faces"] == len(coarse.faces)
+    assert result.vertices.shape == V2.shape and result.full_surface.proxy_faces == len(coarse.faces)
 
 
 def test_a_cached_glb_rig_skips_the_print_body_and_follows_a_moved_file(tmp_path, cache):

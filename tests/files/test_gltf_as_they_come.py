@@ -181,8 +181,8 @@ def test_overlapping_open_clothing_and_joint_caps_run_and_write_no_crossing(tmp_
     assert intersecting_face_pairs(rig.vertices, rig.faces) == 0
     result = sl.optimize(rig, particles=8, iterations=3, seed=0)
     # the posed surface crosses itself only where jointed parts press together, and is written as one clean solid
-    assert result.stats["rest_pairs"] == 0
-    assert result.stats["written_pairs"] == 0 or result.stats["contacts"]
+    assert result.written.rest_pairs == 0
+    assert result.written.written_pairs == 0 or result.written.contacts
     from supportless.files.printbody import united_surface
 
     U, G, _ = united_surface(result.print_vertices, rig.faces)

@@ -13,6 +13,7 @@ from supportless.base.errors import InputError
 from supportless.base.geometry import signed_volume
 from supportless.files.meshes import write_dmat, write_tet_mesh
 from supportless.rig import rig as rig_mod
+from supportless.search import answer as answer_mod
 from supportless.search import optimizer as search_mod
 
 
@@ -455,7 +456,7 @@ def test_the_proxy_survives_the_cache(tmp_path, dense_branch):
 def test_the_search_runs_on_the_proxy_and_answers_at_full_resolution(dense_branch):
     rig, _ = dense_branch
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=2)  # a short polish
-    assert result.stats["proxy_faces"] == len(rig.coarse_rig().faces)
+    assert result.full_surface.proxy_faces == len(rig.coarse_rig().faces)
     assert result.vertices.shape == rig.vertices.shape
     # the value and terms are those of the full surface at the found pose
     objective = result.objective
@@ -502,14 +503,14 @@ def test_a_proxy_pose_whose_full_surface_touches_itself_gives_way_to_the_next_cl
         return check
 
     monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(0))  # the full-surface check of the proxy's answers
-    monkeypatch.setattr(search_mod, "as_written", lambda rig, found: found)  # the real last gate would see the fake
+    monkeypatch.setattr(answer_mod, "as_written", lambda rig, found: found)  # the real last gate would see the fake
     clear = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0, contact=False)  # before any polish
-    assert clear.stats["full_exact_calls"] == 1
+    assert clear.full_surface.full_exact_calls == 1
     np.testing.assert_allclose(seen[0], rig.pose(clear.angles))  # the proxy's answer, checked on the full surface
     seen.clear()
     monkeypatch.setattr(sl.Rig, "self_intersects", full_surface(1))
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", polish=0, contact=False)
-    assert result.stats["full_exact_calls"] == 2
+    assert result.full_surface.full_exact_calls == 2
     assert not np.allclose(result.angles, clear.angles)  # the next candidate, measured on the full surface
     np.testing.assert_allclose(seen[1], rig.pose(result.angles))
     np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)
@@ -520,7 +521,7 @@ def test_the_proxys_candidates_are_rescored_on_the_full_surface(dense_branch):
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", exact_intersections=False, polish=0)
     c = result.candidates  # the proxy's good poses, with the proxy's values
     full = np.asarray(result.objective(c["angles"], c["rotations"]))
-    assert result.stats["full_rescored"] >= 2
+    assert result.full_surface.full_rescored >= 2
     assert result.value == pytest.approx(full.min(), rel=1e-12)  # the best of them on the full surface
     assert result.value <= float(result.objective(c["angles"][0])) + 1e-12  # never worse than the proxy's best
 
@@ -531,7 +532,7 @@ def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monke
     seen = []
     result = sl.optimize(rig, particles=12, iterations=4, orient="keep", symmetric=False, polish=3,
                          callback=lambda it, info: seen.append((it, info["iterations"])))
-    assert result.stats["full_polish_evaluations"] == 1 + 3 * search_mod.POLISH_SAMPLES
+    assert result.full_surface.full_polish_evaluations == 1 + 3 * search_mod.POLISH_SAMPLES
     assert result.value <= chosen.value  # it starts at the chosen pose and keeps it unless it finds better
     np.testing.assert_allclose(result.value, float(result.objective(result.angles)), rtol=1e-12)  # full surface
     assert result.objective.rig is rig and not result.objective.forbidden(result.angles)
@@ -539,9 +540,9 @@ def test_after_the_proxy_the_polish_runs_on_the_full_surface(dense_branch, monke
     assert seen == [(it, 7) for it in range(1, 8)]
     assert len(result.history) == len(chosen.history) + 3
     # by default the polish's generations follow the surface's size (about the same cost at any density)
-    monkeypatch.setattr(search_mod, "PROXY_POLISH_BUDGET", 2 * len(rig.faces))
+    monkeypatch.setattr(answer_mod, "PROXY_POLISH_BUDGET", 2 * len(rig.faces))
     default = sl.optimize(rig, particles=12, iterations=4, orient="keep", symmetric=False)
-    assert default.stats["full_polish_evaluations"] == 1 + 2 * search_mod.POLISH_SAMPLES
+    assert default.full_surface.full_polish_evaluations == 1 + 2 * search_mod.POLISH_SAMPLES
 
 
 @pytest.mark.parametrize("sizes", [5e4, 1e5])
@@ -638,14 +639,14 @@ def test_a_sculpt_is_measured_on_its_quickly_reduced_surface(sculpt_branch, dens
 def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolution(sculpt_branch):
     rig = sculpt_branch
     result = sl.optimize(rig, particles=12, iterations=4)
-    assert result.stats["measured_faces"] == len(rig.measure_rig().faces)
+    assert result.measured_faces == len(rig.measure_rig().faces)
     assert result.objective.rig is rig.measure_rig()
     np.testing.assert_allclose(result.vertices, sl.base.geometry.place_on_plate(rig.pose(result.angles), rig.up))
     assert result.print_vertices.shape == rig.vertices.shape
     # the answer as written was checked exactly at full resolution
     pairs = len(sl.copyleft.cgal.intersecting_faces(result.print_vertices, rig.faces))
-    assert result.stats["written_pairs"] == pairs
-    assert pairs == 0 or result.stats.get("contacts")  # crossings only where jointed parts press together
+    assert result.written.written_pairs == pairs
+    assert pairs == 0 or result.written.contacts  # crossings only where jointed parts press together
     # the answers weighed carry the reduced surface; the slicer's copies take its faces
     if result.choice is not None:
         answer = result.choice.candidates[0].result
@@ -656,8 +657,8 @@ def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolu
 
     report = build_report(rig, result)
     assert report["faces"] == len(rig.faces) and report["measured_faces"] == len(rig.measure_rig().faces)
-    assert report["after"]["intersecting_face_pairs"] == result.stats["written_pairs"]
-    assert report["before"]["intersecting_face_pairs"] == result.stats["rest_pairs"] == 0
+    assert report["after"]["intersecting_face_pairs"] == result.written.written_pairs
+    assert report["before"]["intersecting_face_pairs"] == result.written.rest_pairs == 0
     # its predicted support, taken on the reduced surface, is the full surface's within the model's noise
     from supportless.report.report import predicted_slicer
 

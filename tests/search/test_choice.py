@@ -23,7 +23,7 @@ def test_every_kind_of_answer_is_weighed_and_reported(branch_rig, found):
     assert choice is not None and choice.by == "model"
     assert {c.kind for c in choice.candidates} == set(KINDS)
     assert choice.candidates[0].kind == "pose and turn"
-    assert found.stats["chosen_kind"] == choice.candidates[choice.chosen].kind
+    assert found.choice.chosen_kind == choice.candidates[choice.chosen].kind
     np.testing.assert_allclose(found.angles, choice.candidates[choice.chosen].result.angles)
     np.testing.assert_allclose(found.rotation, choice.candidates[choice.chosen].result.rotation)
     report = json.loads(json.dumps(build_report(branch_rig, found)))

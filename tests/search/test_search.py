@@ -110,9 +110,9 @@ def test_optimize_never_worse_than_rest_and_reproducible(branch_rig):
     assert np.all(np.diff(a.history) <= 0)
     # the best pose's terms are measured only when the best changed
     changed = 1 + np.count_nonzero(np.diff(a.history[1:7])) + 1 + np.count_nonzero(np.diff(a.history[7:]))
-    assert 2 <= a.stats["progress_calls"] <= changed
+    assert 2 <= a.stats.progress.calls <= changed
     kept = sl.optimize(rig, particles=12, iterations=6, seed=3, orient="keep")
-    assert len(kept.history) == 7 and 1 <= kept.stats["progress_calls"] <= 6
+    assert len(kept.history) == 7 and 1 <= kept.stats.progress.calls <= 6
     assert a.value <= kept.value  # the turning phase starts from the pose-only phase's best
 
 
@@ -136,7 +136,7 @@ def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
                               w_arap=0.0, w_prior=0.0, joint_limit=170.0, keep_standing=False, free=("all",),
                               orient="keep", contact=False)
     gated = sl.optimize(rig, settings)
-    assert gated.stats["exact_calls"] > 0
+    assert gated.stats.exact.calls > 0
     assert intersecting_face_pairs(rig.pose(gated.angles), rig.faces) == 0
     # with contact between jointed parts allowed, whatever crossing the answer has is such a contact
     touching = sl.optimize(rig, settings.replace(contact=True))
@@ -145,7 +145,7 @@ def test_exact_intersection_gate_rejects_intersecting_poses(branch_rig):
     assert rig.crossings(V, rig.posed_joints(A), ContactRules(),
                          float(sl.self_intersection_volume(V, rig.faces, rig.up))).allowed
     open_gate = sl.optimize(rig, settings.replace(exact_intersections=False))
-    assert "exact_calls" not in open_gate.stats
+    assert open_gate.stats.exact is None
     # the ungated search does reach poses that intersect: the gate changed the result
     assert intersecting_face_pairs(rig.pose(open_gate.angles), rig.faces) > 0
 
@@ -474,9 +474,9 @@ def test_poses_the_ray_grid_sees_overlapping_skip_cgal_with_the_same_result(monk
     asked.clear()
     monkeypatch.setattr(search_mod, "OVERLAP_CERTAIN", np.inf)  # CGAL asked about every candidate
     slow = sl.optimize(rig, particles=30, iterations=10, orient="keep", intersects=counted, contact=False)
-    assert fast.stats["overlap_rejections"] >= 3 and slow.stats["overlap_rejections"] == 0
-    assert len(asked) == len(fast_asked) + fast.stats["overlap_rejections"]
-    assert sum(asked) == sum(fast_asked) + fast.stats["overlap_rejections"]  # CGAL agreed: each one intersects
+    assert fast.stats.overlap_rejections >= 3 and slow.stats.overlap_rejections == 0
+    assert len(asked) == len(fast_asked) + fast.stats.overlap_rejections
+    assert sum(asked) == sum(fast_asked) + fast.stats.overlap_rejections  # CGAL agreed: each one intersects
     np.testing.assert_array_equal(fast.angles, slow.angles)
     assert fast.value == slow.value
 
@@ -509,9 +509,9 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
 
 def test_the_polish_starts_from_the_swarms_best_and_is_never_worse(branch_rig):
     plain = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, choose=False, symmetric=False)
-    assert plain.stats["polish_evaluations"] == 0  # none by default on a model searched at full resolution
+    assert plain.stats.polish_evaluations == 0  # none by default on a model searched at full resolution
     polished = sl.optimize(branch_rig, particles=12, iterations=6, seed=3, polish=5, choose=False, symmetric=False)
-    assert polished.stats["polish_evaluations"] == 1 + 5 * POLISH_SAMPLES
+    assert polished.stats.polish_evaluations == 1 + 5 * POLISH_SAMPLES
     assert polished.value < plain.value  # a short swarm leaves room that small steps find
     np.testing.assert_array_equal(polished.history[:len(plain.history)], plain.history)  # the same swarm first
     assert len(polished.history) == len(plain.history) + 5 and np.all(np.diff(polished.history) <= 0)
@@ -528,7 +528,7 @@ def test_only_poses_that_could_become_the_swarms_best_are_measured_for_self_inte
     monkeypatch.setattr(Objective, "_intersection",  # poses measured (one for an unbatched pose)
                         lambda self, V: measured.append(len(V) if V.ndim == 3 else 1) or real(self, V))
     result = sl.optimize(branch_rig, particles=30, iterations=10, seed=2, symmetric=False)
-    progress = result.stats["progress_calls"]  # each change of the best measures it once, in full
+    progress = result.stats.progress.calls  # each change of the best measures it once, in full
     evaluations = 30 * 11 + 15 * 11  # the pose phase, then half the swarm turning
     assert 0 < sum(measured) - progress < 0.2 * evaluations
     assert float(result.objective(result.angles, result.rotation)) == pytest.approx(result.value, rel=1e-12)

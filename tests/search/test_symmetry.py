@@ -66,7 +66,7 @@ def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
 def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tpose_rig, bunny_rig):
     """symmetric=None on a mirrored skeleton: both searches, the rule of SYMMETRY_SHARE on predicted support."""
     from supportless.search.naturalness import mirror_error_deg
-    from supportless.search.optimizer import FREE_SHARE, SYMMETRY_SHARE, predicted_mm
+    from supportless.search.answer import FREE_SHARE, SYMMETRY_SHARE, predicted_mm
 
     rig = tpose_rig
     seen = []

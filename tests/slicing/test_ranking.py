@@ -76,7 +76,7 @@ def test_the_answer_the_slicer_finds_cheapest_is_chosen(branch_rig, found, kind)
     assert len(calls) == 1 and calls[0]["workers"] == 2 and calls[0]["by_feature"]
     assert len(calls[0]["meshes"]) == len(picked)
     assert chosen.choice.by == "slicer" and chosen.choice.chosen == target
-    assert chosen.stats["chosen_kind"] == chosen.choice.candidates[target].kind
+    assert chosen.choice.chosen_kind == chosen.choice.candidates[target].kind
     assert min(print_distance_deg(chosen.angles, chosen.rotation, choice.candidates[i].result.angles,
                                   choice.candidates[i].result.rotation, choice.up) for i in of_kind) < 0.5
     np.testing.assert_allclose(chosen.print_vertices, choice.candidates[target].result.print_vertices)

@@ -1,7 +1,7 @@
 """The page's Optimize: the pose search run in the background, streaming its best pose into the state.
 
 :class:`BackgroundSearch` is the part of :class:`~supportless.apps.ui.state.EditorState`
-that runs :func:`supportless.search.optimizer.optimize` in a thread from the
+that runs :func:`supportless.search.answer.optimize` in a thread from the
 current pose, lets the slicer choose among its answers as the command line does
 (:func:`supportless.slicing.ranking.slice_choice_if_found`), and announces
 ``"search_started"``, ``"progress"``, ``"pose"`` and ``"search_done"``.
@@ -15,7 +15,7 @@ import threading
 import numpy as np
 
 from ...search.objective import Objective
-from ...search.optimizer import optimize
+from ...search.answer import optimize
 from ...search.settings import SearchSettings
 from ...slicing.prusaslicer import find_prusa_slicer
 from ...slicing.ranking import slice_choice_if_found
@@ -42,7 +42,7 @@ class BackgroundSearch:
         return t is not None and t.is_alive()
 
     def start_optimize(self, **overrides) -> bool:
-        """Run :func:`supportless.search.optimizer.optimize` from the current pose in a background thread.
+        """Run :func:`supportless.search.answer.optimize` from the current pose in a background thread.
 
         The search streams its best pose and print rotation into the state
         (``"pose"`` events with ``origin="search"``) and ends with the best it
