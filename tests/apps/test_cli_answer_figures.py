@@ -12,8 +12,9 @@ stand-in here (:func:`stand_in_slicer`: the slicer model at another threshold, e
 no PrusaSlicer needed): the choice, the report and the summary are the command's own, the slicer's
 measurement is not.
 
-The figures were recorded at commit 20fa53c (the ``pipeline`` branch's base, before the answer's
-stages became :mod:`supportless.search.answer`) with ``../shared`` beside the project, by::
+The figures were recorded at commit de15cad (before the answer's stages became
+:mod:`supportless.search.answer`; the same refactor left 20fa53c's figures identical too, before that
+commit's cuts to the search changed them in their last digits) with ``../shared`` beside the project, by::
 
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record            # the test's small search
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record defaults   # the command's own defaults
