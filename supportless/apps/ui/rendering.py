@@ -139,7 +139,8 @@ class Rendering:
         if rig.dim == 3 and not self._newer_waiting(version):  # the exact crossings (CGAL) once the edits pause
             m |= state.exact_measures(V)
             self._crossings = m["intersecting_faces"]
-            overlays(self._crossings)
+            if not weights:
+                self.scene.draw_crossings(shown, self._crossings)
             self.latency_ms["exact"] = 1e3 * (time.perf_counter() - t_in)
             panel()
         self.panel.show_bone(selected, fixed, locked)

@@ -405,22 +405,36 @@ class Scene:
             return
         F = self.faces
         risky = np.zeros(len(F), bool) if risky is None else risky
-        inter = np.zeros(len(F), bool)
-        if intersecting is not None:
-            inter[intersecting] = True
         level = support_levels(V3, F, self.up, risky)
-        a, b, c = V3[F[:, 0]], V3[F[:, 1]], V3[F[:, 2]]
-        n = np.cross(b - a, c - a)
-        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-        eps = 0.002 * self.size
-
-        def lifted(sel, k):  # the selected faces, lifted off the surface so they show on top
-            return (np.stack([a[sel], b[sel], c[sel]], 1) + k * eps * n[sel][:, None, :]).reshape(-1, 3)
-
         with self.server.atomic():
             for k in range(3):
-                self._overlay(f"risky{k}", lifted(risky & (level == k), 1.0), RISKY_COLORS[k])
-            self._overlay("intersections", lifted(inter, 1.5), INTERSECT_COLOR, side="double")
+                self._overlay(f"risky{k}", self._lifted(V3, np.flatnonzero(risky & (level == k)), 1.0),
+                              RISKY_COLORS[k])
+            self._draw_crossings(V3, intersecting)
+
+    def draw_crossings(self, vertices: np.ndarray, intersecting: np.ndarray | None) -> None:
+        """Only the faces that intersect another face (3D), as :meth:`draw_overlays` draws them: the app draws the
+        exact crossings after the rest of a pose's overlays.
+
+        Parameters
+        ----------
+        vertices : (n, 3) float64
+            As :meth:`draw_overlays`.
+        intersecting : (k,) int64 or None
+        """
+        self._draw_crossings(self.scale * to3(vertices), intersecting)
+
+    def _draw_crossings(self, V3: np.ndarray, intersecting: np.ndarray | None) -> None:
+        faces = np.zeros(0, np.int64) if intersecting is None else np.unique(np.asarray(intersecting, np.int64))
+        self._overlay("intersections", self._lifted(V3, faces, 1.5), INTERSECT_COLOR, side="double")
+
+    def _lifted(self, V3: np.ndarray, faces: np.ndarray, k: float) -> np.ndarray:
+        """(3 len(faces), 3) float64: the corners of ``faces`` (s,) int64 of the scaled surface ``V3``, lifted off it
+        along their normals by ``k`` times a small share of the model's size, so they show on top."""
+        a, b, c = (V3[self.faces[faces, i]] for i in range(3))
+        n = np.cross(b - a, c - a)
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
+        return (np.stack([a, b, c], 1) + k * 0.002 * self.size * n[:, None, :]).reshape(-1, 3)
 
     def draw_faces(self, key: str, vertices: np.ndarray, mask: np.ndarray | None, color, lift: float = 2.0) -> None:
         """Some faces of the posed surface in one colour, lifted off it to show on top (3D).
