@@ -103,7 +103,7 @@ def run(model: str, folder: Path, cura: bool, pictures: bool) -> dict:
                                  for c in data.get("contacts") or [] if c["parts"][0] != c["parts"][1])[:90],
            "skinning": data.get("skinning", ""), "largest": data["largest_rotation_deg"],
            "written": _written_checks(out), "seconds": data["runtime_seconds"],
-           "fell_back": bool(data.get("fell_back_to_rest"))}
+           "fell_back": bool(data.get("rest_instead"))}  # why the rest pose was written, when it was
     if cura:
         rest = folder / f"{name}-rest.stl"
         _write_rest(path, rest)
