@@ -77,21 +77,23 @@ def _sections(V, F, U, above):
             below = (sa <= 0.0) + (sb <= 0.0) + (sc <= 0.0)
             if below == 0 or below == 3:
                 continue
-            # the two cut edges in the order ab, bc, ca: the first and the last of them
-            ends = np.empty((2, 3))
-            k = 0
+            # the two cut edges in the order ab, bc, ca: the first (f) and the last (s) of them
+            fx = fy = fz = sx = sy = sz = 0.0
+            first = True
             for i, j, si, sj in ((a, b, sa, sb), (b, c, sb, sc), (c, a, sc, sa)):
                 if (si <= 0.0) != (sj <= 0.0):
                     t = si / (si - sj)
-                    for d in range(3):
-                        ends[min(k, 1), d] = V[p, i, d] + t * (V[p, j, d] - V[p, i, d])
-                    k += 1
+                    x = V[p, i, 0] + t * (V[p, j, 0] - V[p, i, 0])
+                    y = V[p, i, 1] + t * (V[p, j, 1] - V[p, i, 1])
+                    z = V[p, i, 2] + t * (V[p, j, 2] - V[p, i, 2])
+                    if first:
+                        fx, fy, fz, first = x, y, z, False
+                    else:
+                        sx, sy, sz = x, y, z
             e1x, e1y, e1z = V[p, b, 0] - V[p, a, 0], V[p, b, 1] - V[p, a, 1], V[p, b, 2] - V[p, a, 2]
             e2x, e2y, e2z = V[p, c, 0] - V[p, a, 0], V[p, c, 1] - V[p, a, 1], V[p, c, 2] - V[p, a, 2]
             nx, ny, nz = e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
             ax_, ay_, az_ = uy * nz - uz * ny, uz * nx - ux * nz, ux * ny - uy * nx  # up x normal
-            fx, fy, fz = ends[0, 0], ends[0, 1], ends[0, 2]
-            sx, sy, sz = ends[1, 0], ends[1, 1], ends[1, 2]
             run = (sx - fx) * ax_ + (sy - fy) * ay_ + (sz - fz) * az_
             sign = 1.0 if run > 0.0 else (-1.0 if run < 0.0 else 0.0)
             cross_u = (fy * sz - fz * sy) * ux + (fz * sx - fx * sz) * uy + (fx * sy - fy * sx) * uz

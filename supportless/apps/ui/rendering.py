@@ -112,12 +112,8 @@ class Rendering:
         weights = view["weights"]
         risky = m["risky"] if printed else m["risky_standing"]
         crossings = getattr(self, "_crossings", None)  # the last pose's, until this one's are found
-
-        def overlays(inter):
-            self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
-                                     None if weights else inter, selected if weights else None)
-
-        overlays(crossings)
+        self.scene.draw_overlays(shown, risky if view["show_risky"] and not weights else None,
+                                 None if weights else crossings, selected if weights else None)
         if rig.dim == 3:
             self.scene.draw_support(support_columns(shown, rig.faces, rig.up, settings.overhang_angle,
                                                     PREVIEW_RESOLUTION) if view["show_support"] else None)
