@@ -17,7 +17,7 @@ import numpy as np
 from ..base.geometry import surface_digest
 
 __all__ = ["PART_FACES", "face_parts", "intersecting_faces", "intersecting_faces_since", "intersecting_face_pairs",
-           "self_intersects", "self_union"]
+           "self_intersects", "self_union", "split_at_crossings"]
 
 #: A surface with more triangles than this is checked in parts (:func:`face_parts`), one CGAL call each: the
 #: same pairs, in a fraction of the memory (CGAL's exact kernel holds every triangle of a part at once; the
@@ -272,3 +272,38 @@ def _union_with_nothing(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.nd
 
     out = igl.copyleft.cgal.mesh_boolean(V, F, np.zeros((0, 3)), np.zeros((0, 3), np.int64), "union")
     return np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
+
+
+def split_at_crossings(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each triangle split along the curves where others cross it (CGAL's exact cut, rounded to doubles).
+
+    The pieces are not sorted into inside and outside: that is the caller's (a self-union keeps those outside the
+    solid). Points where curves meet are shared by the pieces of every triangle that meets there.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+
+    Returns
+    -------
+    vertices : (n', 3) float64
+        The input's first, unchanged, then the points on the crossing curves.
+    faces : (f', 3) int64
+        The pieces; a triangle that nothing crosses is one piece, itself.
+    parent : (f',) int64
+        The input triangle each piece comes from.
+    """
+    import igl
+    import igl.copyleft.cgal  # noqa: F401  (registers the submodule)
+
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int64)
+    VV, FF, _, J, IM = igl.copyleft.cgal.remesh_self_intersections(V, F)
+    IM = np.asarray(IM, np.int64)
+    FF = IM[np.asarray(FF, np.int64)]  # the copies of a point on a curve, one per triangle, made one
+    used = np.unique(np.concatenate([np.arange(len(V)), FF.ravel()]))
+    remap = np.full(len(VV), -1, np.int64)
+    remap[used] = np.arange(len(used))
+    solid = (FF[:, 0] != FF[:, 1]) & (FF[:, 1] != FF[:, 2]) & (FF[:, 2] != FF[:, 0])
+    return np.asarray(VV, np.float64)[used], remap[FF[solid]], np.asarray(J, np.int64)[solid]

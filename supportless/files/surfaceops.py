@@ -149,6 +149,8 @@ def transfer_values(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
     """
     import igl
 
+    if np.shape(values)[1] == 0:  # nothing to carry: no closest points to find
+        return np.zeros((len(points), 0))
     P = np.ascontiguousarray(points, np.float64)
     V = np.ascontiguousarray(vertices, np.float64)
     F = np.ascontiguousarray(faces, np.int64)

@@ -1,0 +1,115 @@
+"""The self-union made where a surface crosses itself (supportless.files.crossings.local_union).
+
+Each case is checked against CGAL's exact self-union of the whole surface (a second method): the same enclosed
+volume, a closed surface free of crossings (also once stored in single precision), and every triangle away from
+the crossings as it was.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+import supportless.files.crossings as crossings
+from supportless.base.geometry import signed_volume
+from supportless.base.kinematics import matrix_to_euler
+from supportless.copyleft.cgal import intersecting_faces, self_union
+from supportless.files.meshes import check_closed_surface
+
+
+def sunk_rod():
+    """A unit sphere and a rod sunk 0.6 into it, as one surface: the rod's tip is wholly inside, far from any crossing."""
+    sphere = trimesh.creation.icosphere(4, 1.0)
+    rod = trimesh.creation.cylinder(0.2, 1.6, sections=32).subdivide().subdivide()
+    rod.apply_translation([0, 0, 1.2])
+    V = np.vstack([sphere.vertices, rod.vertices])
+    F = np.vstack([sphere.faces, rod.faces + len(sphere.vertices)]).astype(np.int64)
+    return V, F
+
+
+def folded_sphere():
+    """A sphere one of whose points is pushed along the surface past its neighbour: its fan folds over itself
+    (the crossing triangles share corners)."""
+    sphere = trimesh.creation.icosphere(3, 1.0)
+    V = sphere.vertices.copy()
+    neighbour = sphere.vertex_neighbors[10][0]
+    V[10] += 1.8 * (V[neighbour] - V[10])
+    return V, sphere.faces.astype(np.int64)
+
+
+def arm_down(rig):
+    """The tpose figure's left upper arm let down 70 degrees against its chest (the arm presses into the torso)."""
+    A = np.zeros((rig.bone_count, 3))
+    A[4] = matrix_to_euler(Rotation.from_rotvec([0, 0, -np.radians(70)]).as_matrix())
+    return rig.pose(A), rig.faces
+
+
+def check_against_the_whole_union(V, F):
+    """The local union of (V, F), checked against CGAL's whole self-union; returns (vertices, faces, source)."""
+    pairs = intersecting_faces(V, F)
+    assert len(pairs) > 0
+    size = float(np.ptp(V, axis=0).max())
+    found = crossings.local_union(V, F, pairs, crossings.SIMPLIFY_TOLERANCE * size, np.float32)
+    assert found is not None
+    Vx, Fx, source = found
+    Vw, Fw = self_union(V, F)
+    check_closed_surface(Fx)
+    assert len(intersecting_faces(Vx, Fx)) == 0
+    assert len(intersecting_faces(Vx.astype(np.float32).astype(np.float64), Fx)) == 0
+    np.testing.assert_allclose(signed_volume(Vx, Fx), signed_volume(Vw, Fw), rtol=1e-9)
+    # the input's points are the input's, where they were; the others lie on the crossing curves
+    assert np.array_equal(Vx[source >= 0], V[source[source >= 0]])
+    assert np.any(source < 0)
+    # every triangle two rings away from a crossing is kept as it was
+    near = np.zeros(len(F), bool)
+    near[np.unique(pairs)] = True
+    for _ in range(crossings.LOCAL_RINGS):
+        corner = np.zeros(len(V), bool)
+        corner[F[near]] = True
+        near |= corner[F].any(axis=1)
+    kept = {tuple(f) for f in np.sort(np.where(source[Fx] >= 0, source[Fx], -1), axis=1).tolist()}
+    away = np.sort(F[~near], axis=1).tolist()
+    inside = sum(tuple(f) not in kept for f in away)
+    return Vx, Fx, source, inside
+
+
+def test_a_rod_sunk_into_a_sphere_keeps_the_union_and_drops_its_swallowed_tip():
+    V, F = sunk_rod()
+    Vx, Fx, source, inside = check_against_the_whole_union(V, F)
+    assert inside > 0  # the rod's tip and the sphere's cap under it went, though no triangle there crosses
+    assert np.linalg.norm(Vx, axis=1).min() > 0.99  # nothing left inside the sphere (its points are on it)
+    assert Vx[:, 2].max() == pytest.approx(2.0)  # the rod's free end is the top
+
+
+def test_a_fold_is_united_as_the_whole_union_unites_it():
+    V, F = folded_sphere()
+    check_against_the_whole_union(V, F)
+
+
+def test_an_arm_pressed_into_the_torso_is_united_as_the_whole_union_unites_it(tpose_rig):
+    V, F = arm_down(tpose_rig)
+    _, _, _, inside = check_against_the_whole_union(V, F)
+    assert inside == 0  # a shallow press: only the crossing triangles' pieces inside go
+
+
+def test_a_large_surface_is_united_where_it_crosses_and_a_small_one_whole(tpose_rig, monkeypatch):
+    V, F = arm_down(tpose_rig)
+    whole = crossings.united_surface(V, F)
+    assert len(F) < crossings.LOCAL_FACES and crossings.LOCALLY not in whole[2]["note"]
+    monkeypatch.setattr(crossings, "LOCAL_FACES", 0)  # as for a sculpt
+    local = crossings.united_surface(V, F)
+    assert local[2]["how"] == "exact self-union" and crossings.LOCALLY in local[2]["note"]
+    assert local[2]["pairs"] == whole[2]["pairs"]
+    assert local[2]["volume"] == pytest.approx(whole[2]["volume"], rel=1e-9)
+
+
+def test_when_the_local_union_fails_the_whole_surface_is_united(tpose_rig, monkeypatch):
+    V, F = arm_down(tpose_rig)
+    monkeypatch.setattr(crossings, "LOCAL_FACES", 0)
+    monkeypatch.setattr(crossings, "local_union", lambda *args: None)
+    Vx, Fx, merged = crossings.united_surface(V, F)
+    assert merged["how"] == "exact self-union" and crossings.LOCALLY not in merged["note"]
+    check_closed_surface(Fx)
+    assert len(intersecting_faces(Vx, Fx)) == 0
