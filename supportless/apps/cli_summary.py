@@ -126,8 +126,9 @@ def _contact_line(report: dict) -> str:
     if contacts:
         named = [f"{c['parts'][0].split(':')[-1]} with {c['parts'][1].split(':')[-1]}" for c in between[:4]]
         more = len(between) - len(named)
-        line += (f"; {contacts[0]['overlap_mm3']:,.0f} mm³ of contact merged into one solid as written ("
-                 + ", ".join(named) + (f" and {more} more" if more > 0 else "") + ")")
+        where = (", ".join(named) + (f" and {more} more" if more > 0 else "") if named  # else one part folds on itself
+                 else f"{contacts[0]['parts'][0].split(':')[-1]} against itself")
+        line += f"; {contacts[0]['overlap_mm3']:,.0f} mm³ of contact merged into one solid as written ({where})"
     return line
 
 

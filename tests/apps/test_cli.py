@@ -613,3 +613,14 @@ def test_every_height_mm_option_takes_the_settings_print_height_range():
         assert (param.type.min, param.type.max, param.type.min_open, param.type.max_open) == (low, high, False, False), name
     assert "0.01" in run("slice-check", "a.stl", "b.stl", "--height-mm", "0.001").output
     assert "0.01" in run("optimize", "a.stl", "--height-mm", "0").output
+
+
+def test_the_contact_line_names_the_parts_that_touch_or_the_one_that_touches_itself():
+    from supportless.apps.cli_summary import _contact_line
+
+    def line(*parts):
+        return _contact_line({"contacts": [{"parts": p, "pairs": 3, "overlap_mm3": 12.0} for p in parts]})
+
+    assert line(("bone:arm", "bone:torso")).endswith("(arm with torso)")
+    assert line(("bone:ear", "bone:ear")).endswith("(ear against itself)")
+    assert "()" not in line(("bone:ear", "bone:ear"))
