@@ -14,6 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .meshes import edge_counts as _edges_and_counts
+from .meshes import row_groups
+
 __all__ = ["HAIR", "apart_by_a_hair", "edge_counts", "manifold_check"]
 
 #: How far a shared corner is moved into its own shell, as a share of the surface's largest extent: 0.6 µm at
@@ -36,16 +39,13 @@ def welded(vertices: np.ndarray, faces: np.ndarray, dtype=np.float32) -> np.ndar
     faces : (f, 3) int64
         Indices of the first vertex at each position.
     """
-    V = np.ascontiguousarray(np.asarray(vertices).astype(dtype))
-    _, first, inverse = np.unique(V, axis=0, return_index=True, return_inverse=True)
-    return first[inverse.reshape(-1)][np.asarray(faces, np.int64)]
+    first, inverse, _ = row_groups(np.asarray(vertices).astype(dtype))
+    return first[inverse][np.asarray(faces, np.int64)]
 
 
 def edge_counts(faces: np.ndarray) -> np.ndarray:
     """How many triangles use each undirected edge of ``faces`` (f, 3) int64; (e,) int64, one per distinct edge."""
-    F = np.asarray(faces, np.int64)
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    return np.unique(E, axis=0, return_counts=True)[1]
+    return _edges_and_counts(np.asarray(faces, np.int64))[1]
 
 
 def manifold_check(vertices: np.ndarray, faces: np.ndarray, dtype=np.float32) -> dict:
@@ -81,13 +81,13 @@ def apart_by_a_hair(vertices: np.ndarray, faces: np.ndarray, hair: float = HAIR,
     """
     V = np.array(vertices, np.float64)
     F = np.asarray(faces, np.int64)
-    if len(F) == 0 or np.any(edge_counts(F) != 2):  # not closed shells by index (a seam a reader closes): as it is
+    if len(F) == 0:
         return V, 0
-    _, inverse, counts = np.unique(V.astype(dtype), axis=0, return_inverse=True, return_counts=True)
-    shared = np.flatnonzero(counts[inverse.reshape(-1)] > 1)
+    _, inverse, counts = row_groups(V.astype(dtype))
+    shared = np.flatnonzero(counts[inverse] > 1)
     shared = shared[np.isin(shared, F)]  # a corner no triangle uses is no edge of the file
-    if len(shared) == 0:
-        return V, 0
+    if len(shared) == 0 or np.any(edge_counts(F) != 2):  # none, or not closed shells by index (a seam a reader
+        return V, 0  # closes): as it is
     # away from the other copies' rings of neighbours, toward its own: each onto its own side of the contact,
     # be the parts face to face, side by side along a seam or back to back in a thin fold
     ring = np.zeros_like(V)

@@ -2,6 +2,8 @@
 
 import numpy as np
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from supportless.files.watertight import HAIR, apart_by_a_hair, edge_counts, manifold_check
 
@@ -49,3 +51,19 @@ def test_a_closed_surface_and_a_seam_closed_only_by_position_are_left_as_they_ar
                                                            F[np.flatnonzero((F == 0).any(axis=1))[0]])
     W, moved = apart_by_a_hair(V, F)
     assert moved == 0 and manifold_check(W, F)["closed"]
+
+
+@given(st.integers(0, 2**32 - 1), st.integers(1, 60), st.integers(1, 4))
+@settings(max_examples=40, deadline=None)
+def test_row_groups_are_numpys_unique_rows(seed, rows, distinct):
+    """Rows drawn from a few values (many repeats): the same groups, first rows and counts as ``np.unique``."""
+    from supportless.files.meshes import row_groups
+
+    rng = np.random.default_rng(seed)
+    X = rng.integers(0, distinct, (rows, 3)).astype(np.float32) * np.float32(0.1)
+    first, inverse, counts = row_groups(X)
+    _, want_first, want_inverse, want_counts = np.unique(X, axis=0, return_index=True, return_inverse=True,
+                                                         return_counts=True)
+    assert np.array_equal(first, want_first)
+    assert np.array_equal(inverse, want_inverse.ravel())
+    assert np.array_equal(counts, want_counts)
