@@ -200,7 +200,8 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
         kind, predicted and sliced support, and who chose which and why), or
         None when the search's own best was returned unweighed; ``footprint``
         (:func:`footprint_summary`: the plate contact of the rest pose and the answer); ``strength``
-        (:func:`strength_summary`: the weakest section of the rest pose and of the answer as printed).
+        (:func:`strength_summary`: the weakest section of the rest pose and of the answer as printed; a
+        sculpt's on the surface its answers were weighed on, as the choice's).
 
         ``before`` is the rest pose as it stands; ``after`` is the found
         pose in its print orientation (support counted there), with
@@ -278,7 +279,7 @@ def build_report(rig, result, frame: PrintFrame | None = None) -> dict:
     }
     report["contacts"] = contact_summary(rig, result, frame)
     report["footprint"] = footprint_summary(rig, result, frame)
-    report["strength"] = strength_summary(rig, result, frame)
+    report["strength"] = strength_summary(objective.rig if reduced else rig, result, frame)  # a sculpt: as weighed
     report["rest_instead"] = result.rest_instead  # why the rest pose was written, when it was
     report["standing"] = standing_answer(result)
     report["skinning"] = skinning_label(rig)

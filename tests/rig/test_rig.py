@@ -665,3 +665,10 @@ def test_a_sculpt_is_searched_on_the_reduced_surface_and_answered_at_full_resolu
     full = predicted_slicer(rig, result, report["predicted_slicer"]["height_mm"])
     for key in ("before_mm", "after_mm"):
         assert report["predicted_slicer"][key] == pytest.approx(full[key], rel=0.05, abs=1.0)
+    # and so is its strength (the weakest sections as the choice weighed them, not a full-resolution analysis)
+    from supportless.files.printframe import rig_print_frame
+    from supportless.report.report import strength_summary
+
+    whole = strength_summary(rig, result, rig_print_frame(rig))
+    for key in ("rest", "answer"):
+        assert report["strength"][key]["safety_factor"] == pytest.approx(whole[key]["safety_factor"], rel=0.1)
