@@ -195,11 +195,46 @@ def local_union(vertices: np.ndarray, faces: np.ndarray, pairs: np.ndarray, tol:
     rest = F[~region]
     Fa = np.vstack([rest, ids[Fs]])
     piece = _pieces(Fa, n, len(rest))
-    keep = _bounding(Va, Fa, piece, V, F)[piece]
+    vote = _bounding(Va, Fa, piece, V, F)
+    for choice in _choices(vote, np.bincount(piece)):
+        found = _assembled(Va, Fa, choice[piece], n, len(rest), used, tol, stored)
+        if found is not None:
+            return found
+    return None
+
+
+#: How many ways of keeping the pieces :func:`local_union` tries: the vote's, then with the smaller pieces' verdicts
+#: turned (one, then two, ...): a fold's pieces are a few triangles each, whose points just in front and behind
+#: can fall on either side of a sheet a hair away.
+LOCAL_CHOICES = 16
+
+
+def _choices(vote: np.ndarray, sizes: np.ndarray):
+    """The ways of keeping pieces to try: ``vote``, then with the verdicts of up to all pieces but the largest
+    turned, fewest turned first, smallest pieces first; at most :data:`LOCAL_CHOICES`."""
+    from itertools import combinations, islice
+
+    others = [int(k) for k in np.argsort(sizes, kind="stable") if k != int(np.argmax(sizes))]
+
+    def ways():
+        for count in range(len(others) + 1):
+            for turned in combinations(others, count):
+                choice = vote.copy()
+                choice[list(turned)] = ~choice[list(turned)]
+                yield choice
+
+    return islice(ways(), LOCAL_CHOICES)
+
+
+def _assembled(Va, Fa, keep, n, untouched, used, tol, stored):
+    """:func:`local_union`'s surface of the kept triangles ``keep`` (f,) bool of ``Fa`` (the ``untouched`` first,
+    then the cut's), tidied and checked where the cut changed it; ``(vertices, faces, source)`` or None."""
     cut = keep.copy()
-    cut[:len(rest)] = False
+    cut[:untouched] = False
     # the cut's kept triangles tidied on their own; the points they share with the untouched ones must not move
     T = Fa[cut]
+    if len(T) == 0:
+        return None
     tv, tl = np.unique(T, return_inverse=True)
     shared = np.zeros(len(Va), bool)
     shared[Fa[keep & ~cut].ravel()] = True
@@ -370,7 +405,7 @@ def winding_surface(V, F, cells: int = WINDING_CELLS):
     remap[used] = np.arange(len(used))
     Vs, Fs = Vs[used], remap[Fs]
     if len(Fs) > WINDING_MAX_FACES:  # cells smaller than the details of a low-poly body: fewer, larger triangles
-        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES)
+        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES, fast_first=False)  # (even: it may be a proxy's)
         if simpler is not None and not _touches_itself(*simpler):
             Vs, Fs = simpler
     return Vs, Fs

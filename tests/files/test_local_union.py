@@ -113,3 +113,10 @@ def test_when_the_local_union_fails_the_whole_surface_is_united(tpose_rig, monke
     assert merged["how"] == "exact self-union" and crossings.LOCALLY not in merged["note"]
     check_closed_surface(Fx)
     assert len(intersecting_faces(Vx, Fx)) == 0
+
+
+def test_the_ways_of_keeping_pieces_start_with_the_vote_and_turn_the_smallest_first():
+    vote = np.array([True, True, False])
+    ways = [w.tolist() for w in crossings._choices(vote, np.array([100, 3, 5]))]
+    assert ways == [[True, True, False], [True, False, False], [True, True, True], [True, False, True]]
+    assert len(list(crossings._choices(np.ones(12, bool), np.arange(1, 13)))) == crossings.LOCAL_CHOICES
