@@ -18,14 +18,22 @@ import numpy as np
 from ..base.errors import InputError
 from ..base.geometry import signed_volume, surface_digest
 
-__all__ = ["FAST_FIRST_FACES", "FAST_FIRST_TARGET", "SLICE_FACES", "quickly_reduced", "reduced_alike",
-           "simplify_surface"]
+__all__ = ["FAST_FIRST_FACES", "FAST_FIRST_TARGET", "PROXY_CELLS", "SLICE_FACES", "folded_pairs", "quickly_reduced",
+           "reduced_alike", "simplify_surface"]
 
 #: A surface of more triangles than this is reduced by quadric collapses to :data:`FAST_FIRST_TARGET` before
 #: libigl's careful collapses (the 1.8M-triangle bunny: 124 s of libigl alone, 15 s both ways). Surfaces up
 #: to here (the zoo, the 111k bunny) are simplified by libigl alone, as they always were.
 FAST_FIRST_FACES = 400_000
 FAST_FIRST_TARGET = 200_000
+
+#: A sculpt's proxy is collapsed from the surface of its quick reduction's winding number on a grid of this many
+#: cells along the longest side (:func:`~supportless.files.crossings.winding_surface`: even triangles, a cell
+#: 0.3 mm on a 60 mm print), not from the quick reduction itself: collapsed from that, the 5.35M bunny's proxy
+#: had 292 pairs of adjacent triangles folded onto each other and its answer 21 % less support (the 1.8M bunny's
+#: 65 %); from the grid's surface it has none, and the answers are 63.9 % and 64.6 %. 120 cells cost 6 s less
+#: but answered the 1.8M bunny with 58.6 % (``benchmarks/RESULTS.md``, "Sculpts", 2026-11-28).
+PROXY_CELLS = 200
 
 #: Edges shorter than this fraction of the median edge of a quickly reduced surface are welded to a point.
 WELD_FRACTION = 1e-2
@@ -47,7 +55,8 @@ def simplify_surface(vertices: np.ndarray, faces: np.ndarray, max_faces: int,
     max_faces : int
     fast_first : bool
         Past :data:`FAST_FIRST_FACES` triangles, start from :func:`quickly_reduced` when it gives a clean
-        surface (False: libigl's collapses all the way, the slow and sure way).
+        surface, and for a proxy (``max_faces`` under :data:`FAST_FIRST_TARGET`) from that one's winding-number
+        surface on :data:`PROXY_CELLS` cells (False: libigl's collapses all the way, the slow and sure way).
 
     Returns
     -------
@@ -57,7 +66,13 @@ def simplify_surface(vertices: np.ndarray, faces: np.ndarray, max_faces: int,
     import igl
 
     if fast_first and len(faces) > max(FAST_FIRST_FACES, max_faces):
-        vertices, faces = quickly_reduced(vertices, faces, FAST_FIRST_TARGET) or (vertices, faces)
+        from .crossings import winding_surface
+
+        quick = quickly_reduced(vertices, faces, FAST_FIRST_TARGET)
+        if quick is not None:
+            vertices, faces = quick
+            if max_faces < FAST_FIRST_TARGET:  # a proxy: remade on a grid first, so no collapse folds it
+                vertices, faces = winding_surface(vertices, faces, PROXY_CELLS)
 
     from .meshes import check_closed_surface
 
@@ -178,3 +193,29 @@ def reduced_alike(vertex_sets: list[np.ndarray], faces: np.ndarray, max_faces: i
     kept = np.empty(int(into.max()) + 1, np.int64)
     kept[into[order][starts]] = order[starts]  # one original vertex per reduced vertex
     return [np.asarray(V, np.float64)[kept] for V in vertex_sets], np.asarray(G, np.int64)
+
+
+def folded_pairs(vertices: np.ndarray, faces: np.ndarray, limit: float = -0.99) -> np.ndarray:
+    """The pairs of triangles that share an edge and lie folded onto each other (their normals opposite).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (f, 3) int64
+        Closed, manifold: each edge in two triangles.
+    limit : float
+        Normals whose dot product is below this are opposite.
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        Face indices, each pair once.
+    """
+    V, F = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
+    normal = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(F)), 3)
+    order = np.lexsort((E[:, 1], E[:, 0]))
+    a, b = owner[order][0::2], owner[order][1::2]  # each edge's two triangles, side by side once sorted
+    return np.column_stack([a, b])[np.einsum("ij,ij->i", normal[a], normal[b]) < limit]

@@ -81,10 +81,18 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
         return quick(V, F, n)
 
     monkeypatch.setattr(simplify, "quickly_reduced", spy)
+    gridded = []
+    from supportless.files import crossings
+
+    remade = crossings.winding_surface
+    monkeypatch.setattr(crossings, "winding_surface", lambda V, F, cells: gridded.append(cells) or remade(V, F, cells))
     U, G = simplify.simplify_surface(V, F, 500)
     assert seen == [(len(F), 8_000)] and len(G) <= 500
+    assert gridded == [simplify.PROXY_CELLS]  # a proxy: collapsed from the quick reduction's grid surface
     check_closed_surface(G)
     assert len(intersecting_faces(U, G)) == 0
+    assert len(simplify.folded_pairs(U, G)) == 0
+    assert signed_volume(U, G) == pytest.approx(4 / 3 * np.pi * 1000, rel=0.2)
     # the slow way: asked for, or when the quick reduction is not clean (None)
     seen.clear()
     U2, G2 = simplify.simplify_surface(V, F, 500, fast_first=False)
@@ -96,3 +104,16 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
     seen.clear()
     simplify.simplify_surface(*icosphere(4), 300)
     assert seen == []
+
+
+def test_folded_pairs_are_the_adjacent_triangles_whose_normals_are_opposite():
+    """A regular-ish tetrahedron has none; a sliver tetrahedron (a corner a hair above the opposite face) has its
+    two triangles on the long edge folded onto each other."""
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    assert len(simplify.folded_pairs(V, F)) == 0
+    # triangles 0 and 1 share edge 0-1; corner 3 lies a hair above triangle 0, so triangle 1 folds back over it
+    W = np.array([[0.0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, 0.9, 1e-6]])
+    G = np.array([[0, 1, 2], [1, 0, 3], [0, 2, 3], [1, 3, 2]])  # a closed sliver tetrahedron
+    pairs = simplify.folded_pairs(W, G)
+    assert {tuple(sorted(p)) for p in pairs.tolist()} >= {(0, 1)}

@@ -602,6 +602,7 @@ def sculpt_branch():
     mp.setattr(rig_mod, "PROXY_TARGET", len(F2) // 8)
     mp.setattr(simplify, "FAST_FIRST_FACES", len(F2) - 1)
     mp.setattr(simplify, "FAST_FIRST_TARGET", len(F2) // 2)
+    mp.setattr(simplify, "PROXY_CELLS", 60)  # the proxy's grid as coarse as this small figure allows
     try:
         yield sl.prepare_rig(V2, F2, J, B, "y", name="sculpt")
     finally:
