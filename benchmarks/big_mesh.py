@@ -10,12 +10,13 @@ every stage runs: each stage's wall time and the largest resident memory sampled
 the whole run's peak (``ru_maxrss``). Stages are the steps the command announces
 (:func:`supportless.base.progress.step`); a stage inside another is indented.
 
-    python benchmarks/big_mesh.py [--case bunny4] [--out FILE.md]
+    python benchmarks/big_mesh.py [--case bunny4] [--proxy-cells N] [--out FILE.md]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import resource
 import sys
@@ -80,15 +81,22 @@ def profile(case: str) -> tuple[list[dict], dict]:
             except SystemExit:
                 pass
         total = time.perf_counter() - t
+        try:
+            with open(f"{out}/report.json") as fh:
+                reduction = json.load(fh)["reduction_percent"]["support_prism"]
+        except (OSError, KeyError, ValueError):
+            reduction = None
     sampler.stop.set()
     rows.sort(key=lambda r: r["t0"])
     return rows, {"seconds": total, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-                  "command": "supportless " + " ".join(argv)}
+                  "command": "supportless " + " ".join(argv), "reduction": reduction}
 
 
 def table(case: str, rows: list[dict], whole: dict) -> str:
     lines = [f"`{case}`, {os.cpu_count()} cores, load average before {os.getloadavg()[0]:.2f}: "
-             f"{whole['seconds']:.1f} s end to end, peak {whole['peak_mb']:.0f} MB", "",
+             f"{whole['seconds']:.1f} s end to end, peak {whole['peak_mb']:.0f} MB"
+             + (f", support (prism) {whole['reduction']:.1f} % less" if whole.get("reduction") is not None else ""),
+             "",
              "| stage | seconds | largest resident memory during it |", "|---|---|---|"]
     for r in rows:
         lines.append(f"| {'&nbsp;' * 4 * r['depth']}{r['stage']} | {r['seconds']:.1f} | {r['peak_mb']:.0f} MB |")
@@ -99,7 +107,13 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="bunny4", choices=["bunny4", "bunny5m"])
     p.add_argument("--out", default=None, help="also append the table to this file")
+    p.add_argument("--proxy-cells", type=int, default=None,
+                   help="the proxy's grid (supportless.files.simplify.PROXY_CELLS) for this run")
     args = p.parse_args(argv)
+    if args.proxy_cells is not None:
+        from supportless.files import simplify
+
+        simplify.PROXY_CELLS = args.proxy_cells
     rows, whole = profile(args.case)
     text = table(args.case, rows, whole)
     print(text)
