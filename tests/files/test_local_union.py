@@ -120,3 +120,26 @@ def test_the_ways_of_keeping_pieces_start_with_the_vote_and_turn_the_smallest_fi
     ways = [w.tolist() for w in crossings._choices(vote, np.array([100, 3, 5]))]
     assert ways == [[True, True, False], [True, False, False], [True, True, True], [True, False, True]]
     assert len(list(crossings._choices(np.ones(12, bool), np.arange(1, 13)))) == crossings.LOCAL_CHOICES
+
+
+@pytest.mark.parametrize("shape", ["annulus", "rod and sphere apart"])
+def test_inside_by_parity_is_the_winding_numbers_inside_on_a_clean_surface(shape):
+    """A ring (a hole through it) and two separate solids, on a grid: the same points inside both ways."""
+    import igl
+
+    if shape == "annulus":
+        m = trimesh.creation.annulus(0.5, 1.0, 0.6, sections=48)
+        m.apply_transform(trimesh.transformations.rotation_matrix(0.4, [1, 1, 0]))  # no face square to the columns
+        V, F = np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
+    else:
+        V, F = sunk_rod()
+        V[len(trimesh.creation.icosphere(4, 1.0).vertices):, 2] += 1.0  # the rod lifted clear of the sphere
+    assert len(intersecting_faces(V, F)) == 0
+    lo, hi = V.min(0) - 0.1, V.max(0) + 0.1
+    h = float((hi - lo).max()) / 40
+    axes = [lo[i] + h * np.arange(int(np.ceil((hi[i] - lo[i]) / h)) + 1) for i in range(3)]
+    inside = crossings.inside_by_parity(V, F, axes)
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)
+    winding = igl.fast_winding_number(V, F, np.ascontiguousarray(grid)).reshape(inside.shape)
+    assert inside.sum() > 100
+    assert np.array_equal(inside, winding > 0.5)
