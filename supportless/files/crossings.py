@@ -14,17 +14,13 @@ import numpy as np
 
 from ..base.isolated import NativeFailure
 from ..copyleft.cgal import intersecting_faces, self_union, split_at_crossings
+from .gridsurface import ISLAND_MIN_VOLUME, grid_surface, inside_by_parity  # noqa: F401 (re-exported)
 from .simplify import simplify_surface
 from .surfaceops import _collapse_short_edges, _components, _flip_caps, _is_closed, _volume, _weld, transfer_values
 
 __all__ = ["ISLAND_MIN_VOLUME", "LOCAL_FACES", "SIMPLIFY_TOLERANCE", "WINDING_CELLS", "local_union", "united_surface",
            "winding_surface"]
 
-#: Solids still apart after bridging below this fraction of the volume are
-#: dropped (eyes floating in front of a face would print in the air); larger
-#: ones are kept as separate pieces, with a warning. Pockets and crumbs of a
-#: winding-number surface below it go too.
-ISLAND_MIN_VOLUME = 0.01
 
 #: Grid cells along the longest side for the winding-number surface that
 #: replaces a body whose crossings an exact self-union cannot resolve (a cell
@@ -356,111 +352,15 @@ def _touches_itself(V, F) -> bool:
     return any(len(intersecting_faces(V * k, F)) for k in (1.0, 1000.0 / np.sqrt(2.0), 1.0 / np.pi))
 
 
-def inside_by_parity(V: np.ndarray, F: np.ndarray, axes) -> np.ndarray:
-    """The grid points inside a closed surface that does not cross itself, by the parity of the surface's crossings
-    below each point along its column (parallel to z).
-
-    Exact where the winding number is 0 or 1 (a clean surface), and a small fraction of the winding number's time
-    on a fine grid: each triangle meets the few columns under its shadow. The columns are moved by a hair
-    (1e-7 of a cell) off the grid's lines, so that none runs exactly along a triangle's edge.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (f, 3) int64
-        Closed, not crossing itself.
-    axes : list of three (k_i,) float64
-        The grid's x, y and z coordinates, evenly spaced.
-
-    Returns
-    -------
-    inside : (k_z, k_y, k_x) bool
-    """
-    xs, ys, zs = (np.asarray(a, np.float64) for a in axes)
-    step = [float(a[1] - a[0]) for a in (xs, ys, zs)]
-    A, B, C = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    corners = np.stack([A, B, C], axis=1)
-    ox, oy = xs[0] + 1e-7 * np.pi * step[0], ys[0] + 1e-7 * np.e * step[1]  # the columns, off the lines
-    i0 = np.ceil((corners[:, :, 0].min(1) - ox) / step[0]).astype(np.int64)
-    i1 = np.floor((corners[:, :, 0].max(1) - ox) / step[0]).astype(np.int64)
-    j0 = np.ceil((corners[:, :, 1].min(1) - oy) / step[1]).astype(np.int64)
-    j1 = np.floor((corners[:, :, 1].max(1) - oy) / step[1]).astype(np.int64)
-    wide, deep = np.maximum(i1 - i0 + 1, 0), np.maximum(j1 - j0 + 1, 0)
-    count = wide * deep
-    tri = np.repeat(np.arange(len(F)), count)
-    k = np.arange(len(tri)) - np.repeat(np.cumsum(count) - count, count)  # index within each triangle's shadow
-    i = i0[tri] + k % wide[tri]
-    j = j0[tri] + k // wide[tri]
-    px, py = ox + step[0] * i, oy + step[1] * j
-    a, b, c = A[tri], B[tri], C[tri]
-    d = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
-    u = ((b[:, 0] - px) * (c[:, 1] - py) - (c[:, 0] - px) * (b[:, 1] - py)) / np.where(d == 0, 1.0, d)
-    v = ((c[:, 0] - px) * (a[:, 1] - py) - (a[:, 0] - px) * (c[:, 1] - py)) / np.where(d == 0, 1.0, d)
-    w = 1.0 - u - v
-    hit = (d != 0) & (u >= 0) & (v >= 0) & (w >= 0)
-    z = u * a[:, 2] + v * b[:, 2] + w * c[:, 2]
-    above = np.ceil((z[hit] - zs[0]) / step[2]).astype(np.int64)  # the first grid point over the crossing
-    keep = above < len(zs)
-    crossings = np.zeros((len(zs) + 1, len(ys), len(xs)), np.int64)
-    np.add.at(crossings, (np.maximum(above[keep], 0), j[hit][keep], i[hit][keep]), 1)
-    return (np.cumsum(crossings, axis=0)[:-1] % 2).astype(bool)
-
-
-def winding_surface(V, F, cells: int = WINDING_CELLS, clean: bool = False):
-    """The outer surface of (V, F) remade by marching cubes: inside by winding number, placed by distance.
-
-    Inside is where the shells wind around a point at least half a turn
-    (libigl's fast winding number), so overlapping and crossing shells are
-    one solid; the field marching cubes meets is that sign times the
-    distance to the surface (computed at the grid points next to a change of
-    sign: the others only need their sign), so the surface is as smooth as
-    the input, not a staircase of cells. On a grid of ``cells`` along the
-    longest side; closed, manifold, never crossing itself. Deterministic.
-    With ``clean`` (the surface is closed and does not cross itself) inside
-    is found by :func:`inside_by_parity` instead: the same points, faster.
+def winding_surface(V, F, cells: int = WINDING_CELLS):
+    """:func:`~supportless.files.gridsurface.grid_surface` of (V, F) by winding number (shells may cross), simplified
+    to at most :data:`WINDING_MAX_FACES` triangles when that stays closed and free of crossings.
 
     Returns vertices (k, 3) float64 and outward faces (g, 3) int64.
     """
-    import igl
-
-    lo, hi = V.min(0), V.max(0)
-    h = float((hi - lo).max()) / cells
-    lo, hi = lo - 2 * h, hi + 2 * h
-    nx, ny, nz = (np.ceil((hi - lo) / h).astype(np.int64) + 1).tolist()
-    axes = [lo[i] + h * np.arange(n) for i, n in enumerate((nx, ny, nz))]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)  # x fastest
-    if clean:
-        inside = inside_by_parity(V, F, axes)
-    else:
-        inside = (igl.fast_winding_number(V, F, np.ascontiguousarray(grid)) > 0.5).reshape(nz, ny, nx)
-    near = np.zeros_like(inside)
-    for axis in range(3):  # grid points with a neighbour across the surface
-        change = np.diff(inside, axis=axis)
-        lower = [slice(None)] * 3
-        upper = [slice(None)] * 3
-        lower[axis], upper[axis] = slice(0, -1), slice(1, None)
-        near[tuple(lower)] |= change
-        near[tuple(upper)] |= change
-    field = np.full(inside.shape, 2.0 * h)
-    d2 = igl.point_mesh_squared_distance(np.ascontiguousarray(grid[near.ravel()]), V, F)[0]
-    field[near] = np.minimum(np.sqrt(d2), 2.0 * h)
-    # no grid point exactly on the surface: marching cubes would put a vertex on it, shared by needle triangles
-    field = np.maximum(field, 1e-2 * h)
-    field = np.where(inside, -field, field).ravel()
-    out = igl.marching_cubes(np.ascontiguousarray(field), grid, nx, ny, nz, 0.0)
-    Vs, Fs = np.asarray(out[0], np.float64), np.asarray(out[1], np.int64)
-    if len(Fs) and _volume(Vs, Fs) < 0:
-        Fs = Fs[:, ::-1]
-    # pockets the winding number left inside (closed voids) and crumbs go: a print body is solid
-    comp = _components(Fs, len(Vs))
-    vols = np.array([_volume(Vs, Fs[comp == c]) for c in range(comp.max() + 1)]) if len(Fs) else np.zeros(0)
-    Fs = Fs[vols[comp] >= ISLAND_MIN_VOLUME * vols[vols > 0].sum()] if len(Fs) else Fs
-    used = np.unique(Fs)
-    remap = np.full(len(Vs), -1, np.int64)
-    remap[used] = np.arange(len(used))
-    Vs, Fs = Vs[used], remap[Fs]
+    Vs, Fs = grid_surface(V, F, cells)
     if len(Fs) > WINDING_MAX_FACES:  # cells smaller than the details of a low-poly body: fewer, larger triangles
-        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES, fast_first=False)  # (even: it may be a proxy's)
+        simpler = simplify_surface(Vs, Fs, WINDING_MAX_FACES)
         if simpler is not None and not _touches_itself(*simpler):
             Vs, Fs = simpler
     return Vs, Fs

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base.errors import InputError
+from ..base.geometry import row_groups
 from .paths import atomic_path
 from .skeleton import check_skeleton
 from .threemf import write_3mf
@@ -228,34 +229,6 @@ def merge_duplicate_vertices(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, 
     keep[F.ravel()] = True
     new_index = np.cumsum(keep) - 1
     return V[keep], new_index[F].astype(np.int64)
-
-
-def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rows of ``X`` grouped by equal values: ``np.unique(X, axis=0, return_index, return_inverse,
-    return_counts)`` without the unique rows, by one lexsort (3.6x faster on 5.3 million float32 rows).
-
-    Parameters
-    ----------
-    X : (n, d) array
-
-    Returns
-    -------
-    first : (k,) int64
-        The first row of each group, groups in the order of their rows' values.
-    inverse : (n,) int64
-        Each row's group.
-    counts : (k,) int64
-        The rows in each group.
-    """
-    X = np.asarray(X)
-    if len(X) == 0:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
-    order = np.lexsort(X.T[::-1])  # by the first column, then the next; stable: each run starts at its first row
-    ordered = X[order]
-    starts = np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)]
-    inverse = np.empty(len(X), np.int64)
-    inverse[order] = np.cumsum(starts) - 1
-    return order[starts].astype(np.int64), inverse, np.diff(np.r_[np.flatnonzero(starts), len(X)])
 
 
 def edge_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

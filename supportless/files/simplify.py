@@ -28,7 +28,7 @@ FAST_FIRST_FACES = 400_000
 FAST_FIRST_TARGET = 200_000
 
 #: A sculpt's proxy is collapsed from the surface of its quick reduction's winding number on a grid of this many
-#: cells along the longest side (:func:`~supportless.files.crossings.winding_surface`: even triangles, a cell
+#: cells along the longest side (:func:`~supportless.files.gridsurface.grid_surface`: even triangles, a cell
 #: 0.3 mm on a 60 mm print), not from the quick reduction itself: collapsed from that, the 5.35M bunny's proxy
 #: had 292 pairs of adjacent triangles folded onto each other and its answer 21 % less support (the 1.8M bunny's
 #: 65 %); from the grid's surface it has none, and the answers are 63.9 % and 64.6 %. 120 cells cost 6 s less
@@ -66,13 +66,13 @@ def simplify_surface(vertices: np.ndarray, faces: np.ndarray, max_faces: int,
     import igl
 
     if fast_first and len(faces) > max(FAST_FIRST_FACES, max_faces):
-        from .crossings import winding_surface
+        from .gridsurface import grid_surface
 
         quick = quickly_reduced(vertices, faces, FAST_FIRST_TARGET)
         if quick is not None:
             vertices, faces = quick
             if max_faces < FAST_FIRST_TARGET:  # a proxy: remade on a grid first, so no collapse folds it
-                vertices, faces = winding_surface(vertices, faces, PROXY_CELLS, clean=True)  # (checked clean)
+                vertices, faces = grid_surface(vertices, faces, PROXY_CELLS, clean=True)  # (checked clean)
 
     from .meshes import check_closed_surface
 

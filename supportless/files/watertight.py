@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..base.geometry import row_groups
 from .meshes import edge_counts as _edges_and_counts
-from .meshes import row_groups
 
 __all__ = ["HAIR", "apart_by_a_hair", "edge_counts", "manifold_check"]
 

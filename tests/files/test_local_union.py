@@ -13,6 +13,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 import supportless.files.crossings as crossings
+import supportless.files.gridsurface as gridsurface
 from supportless.base.geometry import signed_volume
 from supportless.base.kinematics import matrix_to_euler
 from supportless.copyleft.cgal import intersecting_faces, self_union
@@ -138,7 +139,7 @@ def test_inside_by_parity_is_the_winding_numbers_inside_on_a_clean_surface(shape
     lo, hi = V.min(0) - 0.1, V.max(0) + 0.1
     h = float((hi - lo).max()) / 40
     axes = [lo[i] + h * np.arange(int(np.ceil((hi[i] - lo[i]) / h)) + 1) for i in range(3)]
-    inside = crossings.inside_by_parity(V, F, axes)
+    inside = gridsurface.inside_by_parity(V, F, axes)
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)
     winding = igl.fast_winding_number(V, F, np.ascontiguousarray(grid)).reshape(inside.shape)
     assert inside.sum() > 100

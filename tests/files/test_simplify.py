@@ -82,13 +82,14 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
 
     monkeypatch.setattr(simplify, "quickly_reduced", spy)
     gridded = []
-    from supportless.files import crossings
+    from supportless.files import gridsurface
 
-    remade = crossings.winding_surface
-    monkeypatch.setattr(crossings, "winding_surface", lambda V, F, cells: gridded.append(cells) or remade(V, F, cells))
+    remade = gridsurface.grid_surface
+    monkeypatch.setattr(gridsurface, "grid_surface",
+                        lambda V, F, cells, clean: gridded.append((cells, clean)) or remade(V, F, cells, clean))
     U, G = simplify.simplify_surface(V, F, 500)
     assert seen == [(len(F), 8_000)] and len(G) <= 500
-    assert gridded == [simplify.PROXY_CELLS]  # a proxy: collapsed from the quick reduction's grid surface
+    assert gridded == [(simplify.PROXY_CELLS, True)]  # a proxy: collapsed from the quick reduction's grid surface
     check_closed_surface(G)
     assert len(intersecting_faces(U, G)) == 0
     assert len(simplify.folded_pairs(U, G)) == 0

@@ -57,7 +57,7 @@ def test_a_closed_surface_and_a_seam_closed_only_by_position_are_left_as_they_ar
 @settings(max_examples=40, deadline=None)
 def test_row_groups_are_numpys_unique_rows(seed, rows, distinct):
     """Rows drawn from a few values (many repeats): the same groups, first rows and counts as ``np.unique``."""
-    from supportless.files.meshes import row_groups
+    from supportless.base.geometry import row_groups
 
     rng = np.random.default_rng(seed)
     X = rng.integers(0, distinct, (rows, 3)).astype(np.float32) * np.float32(0.1)
