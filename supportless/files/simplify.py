@@ -31,8 +31,8 @@ FAST_FIRST_TARGET = 200_000
 #: cells along the longest side (:func:`~supportless.files.gridsurface.grid_surface`: even triangles, a cell
 #: 0.3 mm on a 60 mm print), not from the quick reduction itself: collapsed from that, the 5.35M bunny's proxy
 #: had 292 pairs of adjacent triangles folded onto each other and its answer 21 % less support (the 1.8M bunny's
-#: 65 %); from the grid's surface it has none, and the answers are 63.9 % and 64.6 %. 120 cells cost 6 s less
-#: but answered the 1.8M bunny with 58.6 % (``benchmarks/RESULTS.md``, "Sculpts", 2026-11-28).
+#: 65 %); from the grid's surface it has none, and the answers are 64.4 % and 63.9 %. 120 cells answered the
+#: 1.8M bunny with 58.6 % (``benchmarks/RESULTS.md``, "Sculpts", 2026-11-28).
 PROXY_CELLS = 200
 
 #: Edges shorter than this fraction of the median edge of a quickly reduced surface are welded to a point.
