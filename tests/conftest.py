@@ -104,6 +104,20 @@ def chromium() -> str:
     return exe
 
 
+#: The environment of a machine with no slicer: ``optimize`` lets the slicer model choose among its answers
+#: instead of slicing four of them (seconds each). For a command whose subject is not the slicer, so that it
+#: runs the same, and as fast, with or without one installed.
+NO_SLICER = {"SUPPORTLESS_PRUSA_SLICER": "/nonexistent/prusa-slicer",
+             "SUPPORTLESS_CURA_ENGINE": "/nonexistent/CuraEngine"}
+
+
+@pytest.fixture
+def no_slicer(monkeypatch):
+    """No slicer for this test (:data:`NO_SLICER`), in this process and in the commands it starts."""
+    for name, value in NO_SLICER.items():
+        monkeypatch.setenv(name, value)
+
+
 @pytest.fixture(scope="session")
 def rig_cache_dir(tmp_path_factory) -> Path:
     """A rig cache folder private to this test session."""

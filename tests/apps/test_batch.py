@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -37,6 +38,26 @@ def folder(tmp_path):
     (d / "broken.tgf").write_text("1 0 0 0\n2 0 1 0\n#\n1 2\n")
     (d / "lonely.stl").write_bytes(b"")
     return d
+
+
+@pytest.fixture(scope="module")
+def prepared_cache(tmp_path_factory):
+    """A rig cache holding branch and arm as the batch prepares them (the cache is keyed by the files' content)."""
+    cache = tmp_path_factory.mktemp("batch-rigs")
+    d = tmp_path_factory.mktemp("batch-models")
+    for name in ("branch", "arm"):
+        V, F, J, B = sl.demo_figure(name)[:4]
+        sl.write_mesh(d / f"{name}.obj", V, F)
+        sl.write_tgf(d / f"{name}.tgf", J, B)
+        sl.load_rig(d / f"{name}.obj", d / f"{name}.tgf", "auto", cache_dir=cache)
+    return cache
+
+
+@pytest.fixture()
+def warm_cache(prepared_cache, tmp_path):
+    """``tmp_path / "cache"`` holding branch and arm prepared, for a test whose subject is not the preparation."""
+    shutil.copytree(prepared_cache, tmp_path / "cache")
+    return tmp_path / "cache"
 
 
 def _summary(out):
@@ -147,7 +168,7 @@ def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("point", ["rename arm/", "rename branch/", "rename contact_sheet.png",
                                    "rename summary.csv"])
-def test_killing_a_run_at_each_step_leaves_no_model_that_looks_finished(folder, tmp_path, point):
+def test_killing_a_run_at_each_step_leaves_no_model_that_looks_finished(folder, tmp_path, point, warm_cache):
     """The run stops at a chosen step (``SUPPORTLESS_PAUSE_AT``), is killed there, and a rerun completes it.
 
     The steps: a model's scratch folder about to become its folder, the contact sheet and the summary about to
@@ -284,7 +305,7 @@ def test_a_rerun_removes_what_a_killed_run_left_even_under_names_with_brackets(t
 
 @pytest.mark.slow
 @linux_only
-def test_kill_9_of_the_tool_ends_its_workers_too(folder, tmp_path):
+def test_kill_9_of_the_tool_ends_its_workers_too(folder, tmp_path, warm_cache):
     """``kill -9`` of the ``supportless batch`` process alone (not its group): its child and the Dask workers
     it started end with it, the worker paused at a model's last step included (none goes on to write it)."""
     from conftest import until

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import NO_SLICER
 
 import supportless as sl
 from supportless.apps.cli import main
@@ -43,12 +44,12 @@ def assert_user_error(result, *fragments):
 
 @pytest.fixture(scope="module")
 def optimized(tmp_path_factory, branch_files):
-    """One tiny search of the branch figure with every output asked for."""
+    """One tiny search of the branch figure with every output asked for (the slicer model chooses: no slicer)."""
     out = tmp_path_factory.mktemp("optimize")
     result = run("optimize", branch_files["mesh"], "--skeleton", branch_files["skeleton"],
                  "--cache-dir", branch_files["cache"], "--particles", 6, "--iterations", 3, "--seed", 5, "-q",
                  "-o", out / "posed.obj", "--pose", out / "pose.json", "--report", out / "report.json",
-                 "--pictures", out / "pictures")
+                 "--pictures", out / "pictures", env=NO_SLICER)
     return out, result
 
 
@@ -101,7 +102,7 @@ def test_optimize_writes_mesh_pose_report_and_pictures(optimized, branch_files):
 
 
 @pytest.mark.slow
-def test_optimize_is_reproducible_with_a_seed(optimized, branch_files, tmp_path):
+def test_optimize_is_reproducible_with_a_seed(optimized, branch_files, tmp_path, no_slicer):
     out, _ = optimized
     again = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
                 "--iterations", 3, "--seed", 5, "-q", "-o", tmp_path / "posed.stl", "--pose", tmp_path / "pose.json")
@@ -234,7 +235,7 @@ def test_ctrl_c_during_the_search_writes_complete_outputs_and_exits_130(branch_f
 
 
 @pytest.mark.slow
-def test_search_options_reach_the_search(branch_files, tmp_path):
+def test_search_options_reach_the_search(branch_files, tmp_path, no_slicer):
     """--overhang-model, --free all and the weights end up in the report's settings and change the search."""
     base = ("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 6,
             "--iterations", 2, "-q", "-o", tmp_path / "posed.stl")
@@ -376,7 +377,7 @@ def test_a_bad_print_rotation_is_one_line(branch_files, tmp_path):
     assert not (tmp_path / "posed.obj").exists()
 
 
-def test_turning_only_needs_no_free_bone(branch_files, tmp_path):
+def test_turning_only_needs_no_free_bone(branch_files, tmp_path, no_slicer):
     """`--joint-limit 0` holds every joint: with `--orient free` the model is only turned."""
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 8,
                  "--iterations", 3, "-q", "--joint-limit", 0, "-o", tmp_path / "turned.obj",
@@ -434,7 +435,7 @@ def test_impossible_output_locations_are_refused_before_the_search(branch_files,
 
 
 def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(branch_files, tmp_path,
-                                                                               monkeypatch):
+                                                                               monkeypatch, no_slicer):
     import supportless.report.outputs as outputs
 
     def full_disk(path, *args, **kwargs):
@@ -451,7 +452,7 @@ def test_a_file_that_cannot_be_written_is_one_line_and_the_others_are_written(br
 
 
 @pytest.mark.slow
-def test_a_closed_stdout_loses_nothing(branch_files, tmp_path):
+def test_a_closed_stdout_loses_nothing(branch_files, tmp_path, no_slicer):
     """``supportless optimize ... | head -1``: the files are written and the exit status is 0."""
     import subprocess
 
@@ -487,7 +488,7 @@ def test_a_negative_seed_names_the_option(branch_files, tmp_path):
     assert result.exit_code == 2 and "'--seed'" in result.stderr and "Traceback" not in result.output
 
 
-def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(branch_files, tmp_path):
+def test_when_every_bone_is_fixed_the_user_is_told_why_only_the_turn_changes(branch_files, tmp_path, no_slicer):
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--fix", "all",
                  "--particles", 4, "--iterations", 1, "-q", "-o", tmp_path / "out.stl")
     assert result.exit_code == 0, result.output
@@ -514,7 +515,7 @@ def test_apply_on_a_full_disk_is_one_line_and_no_file(branch_files, tmp_path, mo
 
 
 @pytest.mark.parametrize("command", ["demo", "batch"])
-def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, monkeypatch, command):
+def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, monkeypatch, command, no_slicer):
     """Disk full while demo writes its files, or while batch writes its contact sheet: one line, no traceback."""
     import errno
 
@@ -544,7 +545,7 @@ def test_a_full_disk_in_demo_and_the_batch_contact_sheet_is_one_line(tmp_path, m
     assert "Traceback" not in result.output
 
 
-def test_the_chain_options_reach_the_search(branch_files, tmp_path):
+def test_the_chain_options_reach_the_search(branch_files, tmp_path, no_slicer):
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
                  "--iterations", 1, "-q", "-o", tmp_path / "p.stl", "--report", tmp_path / "r.json",
                  "--chain-limit", 50, "--w-chain", 0.25)
@@ -557,7 +558,8 @@ def test_the_chain_options_reach_the_search(branch_files, tmp_path):
 
 @pytest.mark.parametrize("flags, symmetric, anatomy", [((), None, True), (("--symmetric",), True, True),
                                                        (("--no-symmetric", "--no-anatomy"), False, False)])
-def test_the_symmetry_and_anatomy_options_reach_the_search(branch_files, tmp_path, flags, symmetric, anatomy):
+def test_the_symmetry_and_anatomy_options_reach_the_search(branch_files, tmp_path, flags, symmetric, anatomy,
+                                                           no_slicer):
     result = run("optimize", branch_files["mesh"], "--cache-dir", branch_files["cache"], "--particles", 4,
                  "--iterations", 1, "-q", "-o", tmp_path / "p.stl", "--report", tmp_path / "r.json", *flags)
     assert result.exit_code == 0, (result.output, result.exception)

@@ -55,7 +55,7 @@ def page(app, chromium):
         browser = p.chromium.launch(executable_path=chromium, args=[
             "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
             "--disable-background-networking"])
-        pg = browser.new_page(viewport={"width": 1200, "height": 800})
+        pg = browser.new_page(viewport={"width": 960, "height": 640})
         pg.on("pageerror", lambda e: errors.append(str(e)))
         pg.goto(app.url)
         pg.get_by_text("Status:").wait_for(timeout=60000)

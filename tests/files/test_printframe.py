@@ -135,7 +135,7 @@ def tiny_files(tmp_path_factory):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name,up", [("yup.obj", "y"), ("zup.stl", "z")])
-def test_optimize_and_apply_write_z_up_millimetre_files_at_the_default_size(tiny_files, name, up, tmp_path):
+def test_optimize_and_apply_write_z_up_millimetre_files_at_the_default_size(tiny_files, name, up, tmp_path, no_slicer):
     folder, files = tiny_files
     out = tmp_path / "out"
     cache = folder / "cache"
@@ -201,7 +201,7 @@ def test_height_and_keep_units_choose_the_printed_size(tiny_files, tmp_path):
 
 
 @pytest.mark.slow
-def test_the_summary_leads_with_the_reports_support_line(tpose_rig, tmp_path):
+def test_the_summary_leads_with_the_reports_support_line(tpose_rig, tmp_path, no_slicer):
     res = run("optimize", "demo:tpose", "--particles", 8, "--iterations", 3, "--seed", 0, "-q",
               "-o", tmp_path / "t.stl", "--report", tmp_path / "r.json")
     assert res.exit_code == 0, (res.output, res.exception)

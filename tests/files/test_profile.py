@@ -73,7 +73,7 @@ def test_a_config_exported_by_prusaslicer_is_read(prusa_slicer, tmp_path):
 
 
 @pytest.mark.slow
-def test_cli_search_threshold_follows_the_profile(tmp_path):
+def test_cli_search_threshold_follows_the_profile(tmp_path, no_slicer):
     """--printer-profile sets the report's threshold and the search's (threshold + margin)."""
     from click.testing import CliRunner
 
