@@ -77,11 +77,6 @@ def united_surface(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     before = _volume(V, F)
     log: list[str] = []
     Vx, Fx, _ = _resolve_crossings(V, F, np.zeros((len(V), 0)), SIMPLIFY_TOLERANCE * size, log, found, np.float32)
-    if (pairs and LOCALLY not in log[0]  # the local union is checked as an STL stores it already
-            and len(intersecting_faces(Vx.astype(np.float32).astype(np.float64), Fx))):  # as an STL stores it
-        Vx, Fx = winding_surface(V, F, WINDING_CELLS)
-        log = [f"{pairs} pairs of crossing triangles: the exact self-union crosses itself once stored in single "
-               f"precision, so the body is the surface of its winding number on a {WINDING_CELLS}-cell grid"]
     after = _volume(Vx, Fx)
     how = "none" if not pairs else ("exact self-union" if "exact self-union" in log[0] else "winding-number surface")
     return Vx, Fx, {"pairs": pairs, "volume_before": before, "volume": after, "merged_volume": before - after,
@@ -101,8 +96,8 @@ def _resolve_crossings(V, F, values, tol, log, pairs=None, stored=np.float64):
     closest point); ``log`` gets a line when there were crossings, and says
     how many remain. ``pairs``: the crossing pairs, when found already. A
     surface of more than :data:`LOCAL_FACES` triangles is united where it
-    crosses (:func:`local_union`, free of crossings also once stored as
-    ``stored``), the whole of it only when that fails.
+    crosses (:func:`local_union`), the whole of it only when that fails.
+    Either union must also be free of crossings once stored as ``stored``.
     """
     pairs = intersecting_faces(V, F) if pairs is None else pairs
     before = len(pairs)
@@ -125,7 +120,9 @@ def _resolve_crossings(V, F, values, tol, log, pairs=None, stored=np.float64):
         flipped = _flip_caps(Vx, Fx, tol)
         if len(intersecting_faces(Vx, flipped)) == 0:
             Fx = flipped
-        if len(Fx) and _is_closed(Fx) and not _touches_itself(Vx, Fx):
+        if (len(Fx) and _is_closed(Fx) and not _touches_itself(Vx, Fx)
+                and (np.dtype(stored) == np.float64  # and as the file stores it (an STL's float32)
+                     or not len(intersecting_faces(Vx.astype(stored).astype(np.float64), Fx)))):
             log.append(f"resolved {before} pairs of crossing triangles by an exact self-union "
                        f"(volume {(_volume(Vx, Fx) / _volume(V, F) - 1) * 100:+.2f} %)")
             return Vx, Fx, transfer_values(Vx, V, F, values)
