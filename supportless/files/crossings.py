@@ -14,7 +14,7 @@ import numpy as np
 
 from ..base.isolated import NativeFailure
 from ..copyleft.cgal import intersecting_faces, self_union, split_at_crossings
-from .gridsurface import ISLAND_MIN_VOLUME, grid_surface, inside_by_parity  # noqa: F401 (re-exported)
+from .gridsurface import ISLAND_MIN_VOLUME, grid_surface  # noqa: F401 (re-exported)
 from .simplify import simplify_surface
 from .surfaceops import _collapse_short_edges, _components, _flip_caps, _is_closed, _volume, _weld, transfer_values
 

@@ -1,5 +1,5 @@
-"""A closed surface remade on a grid: inside by winding number (or, for a clean surface, by ray parity), placed by
-distance, by marching cubes.
+"""A closed surface remade on a grid: inside by winding number (counted along the grid's columns when the input is
+closed), placed by distance, by marching cubes.
 
 What a body whose shells cross each other is remade as when an exact union cannot make it one
 (:func:`supportless.files.crossings.winding_surface`), and what a sculpt's proxy is collapsed from
@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .surfaceops import _components, _volume
+from .surfaceops import _components, _is_closed, _volume
 
-__all__ = ["ISLAND_MIN_VOLUME", "grid_surface", "inside_by_parity"]
+__all__ = ["ISLAND_MIN_VOLUME", "grid_surface", "winding_by_columns"]
 
 #: Solids still apart after bridging below this fraction of the volume are
 #: dropped (eyes floating in front of a face would print in the air); larger
@@ -21,25 +21,28 @@ __all__ = ["ISLAND_MIN_VOLUME", "grid_surface", "inside_by_parity"]
 ISLAND_MIN_VOLUME = 0.01
 
 
-def inside_by_parity(V: np.ndarray, F: np.ndarray, axes) -> np.ndarray:
-    """The grid points inside a closed surface that does not cross itself, by the parity of the surface's crossings
-    below each point along its column (parallel to z).
+def winding_by_columns(V: np.ndarray, F: np.ndarray, axes) -> np.ndarray:
+    """The winding number of a closed surface at the points of a grid, counted along the grid's columns (parallel
+    to z): each crossing below a point adds +1 where the surface faces down (the column enters) and -1 where it
+    faces up.
 
-    Exact where the winding number is 0 or 1 (a clean surface), and a small fraction of the winding number's time
-    on a fine grid: each triangle meets the few columns under its shadow. The columns are moved by a hair
-    (1e-7 of a cell) off the grid's lines, so that none runs exactly along a triangle's edge.
+    On a closed, consistently oriented surface (every edge shared by two faces in opposite directions) this is the
+    winding number exactly, shells crossing or overlapping each other included, and a small fraction of the
+    generalized winding number's time on a fine grid: each triangle meets only the columns under its shadow. The
+    columns are moved by a hair (1e-7 of a cell) off the grid's lines, so that none runs exactly along a
+    triangle's edge.
 
     Parameters
     ----------
     V : (n, 3) float64
     F : (f, 3) int64
-        Closed, not crossing itself.
+        Closed and consistently oriented (outward: the winding number is 1 inside).
     axes : list of three (k_i,) float64
         The grid's x, y and z coordinates, evenly spaced.
 
     Returns
     -------
-    inside : (k_z, k_y, k_x) bool
+    winding : (k_z, k_y, k_x) int64
     """
     xs, ys, zs = (np.asarray(a, np.float64) for a in axes)
     step = [float(a[1] - a[0]) for a in (xs, ys, zs)]
@@ -66,25 +69,41 @@ def inside_by_parity(V: np.ndarray, F: np.ndarray, axes) -> np.ndarray:
     z = u * a[:, 2] + v * b[:, 2] + w * c[:, 2]
     above = np.ceil((z[hit] - zs[0]) / step[2]).astype(np.int64)  # the first grid point over the crossing
     keep = above < len(zs)
+    sign = np.where(d[hit][keep] < 0, 1, -1)  # d is twice the area seen from above: < 0 faces down
     crossings = np.zeros((len(zs) + 1, len(ys), len(xs)), np.int64)
-    np.add.at(crossings, (np.maximum(above[keep], 0), j[hit][keep], i[hit][keep]), 1)
-    return (np.cumsum(crossings, axis=0)[:-1] % 2).astype(bool)
+    np.add.at(crossings, (np.maximum(above[keep], 0), j[hit][keep], i[hit][keep]), sign)
+    return np.cumsum(crossings, axis=0)[:-1]
 
 
-def grid_surface(V, F, cells: int, clean: bool = False):
+def grid_surface(V, F, cells: int, closed: bool | None = None):
     """The outer surface of (V, F) remade by marching cubes: inside by winding number, placed by distance.
 
-    Inside is where the shells wind around a point at least half a turn
-    (libigl's fast winding number), so overlapping and crossing shells are
-    one solid; the field marching cubes meets is that sign times the
-    distance to the surface (computed at the grid points next to a change of
-    sign: the others only need their sign), so the surface is as smooth as
-    the input, not a staircase of cells. On a grid of ``cells`` along the
-    longest side; closed, manifold, never crossing itself. Deterministic.
-    With ``clean`` (the surface is closed and does not cross itself) inside
-    is found by :func:`inside_by_parity` instead: the same points, faster.
+    Inside is where the shells wind around a point at least once, so
+    overlapping and crossing shells are one solid; the field marching cubes
+    meets is that sign times the distance to the surface (computed at the
+    grid points next to a change of sign: the others only need their sign),
+    so the surface is as smooth as the input, not a staircase of cells. On a
+    grid of ``cells`` along the longest side; closed, manifold, never crossing
+    itself. Deterministic. The winding number is counted along the grid's
+    columns (:func:`winding_by_columns`) when (V, F) is closed and
+    consistently oriented, and is libigl's fast winding number (at least half
+    a turn) otherwise: the two agree on a closed surface, and counting is a
+    small fraction of the time.
 
-    Returns vertices (k, 3) float64 and outward faces (g, 3) int64.
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (f, 3) int64
+    cells : int
+        Grid cells along the longest side.
+    closed : bool, optional
+        Whether (V, F) is known to be closed and consistently oriented; checked when not given.
+
+    Returns
+    -------
+    vertices : (k, 3) float64
+    faces : (g, 3) int64
+        Outward.
     """
     import igl
 
@@ -94,8 +113,9 @@ def grid_surface(V, F, cells: int, clean: bool = False):
     nx, ny, nz = (np.ceil((hi - lo) / h).astype(np.int64) + 1).tolist()
     axes = [lo[i] + h * np.arange(n) for i, n in enumerate((nx, ny, nz))]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), -1).transpose(2, 1, 0, 3).reshape(-1, 3)  # x fastest
-    if clean:
-        inside = inside_by_parity(V, F, axes)
+    if closed if closed is not None else _is_closed(F):
+        outward = 1 if _volume(V, F) >= 0 else -1
+        inside = winding_by_columns(V, F, axes) * outward > 0
     else:
         inside = (igl.fast_winding_number(V, F, np.ascontiguousarray(grid)) > 0.5).reshape(nz, ny, nx)
     near = np.zeros_like(inside)

@@ -72,7 +72,7 @@ def simplify_surface(vertices: np.ndarray, faces: np.ndarray, max_faces: int,
         if quick is not None:
             vertices, faces = quick
             if max_faces < FAST_FIRST_TARGET:  # a proxy: remade on a grid first, so no collapse folds it
-                vertices, faces = grid_surface(vertices, faces, PROXY_CELLS, clean=True)  # (checked clean)
+                vertices, faces = grid_surface(vertices, faces, PROXY_CELLS, closed=True)  # (checked closed)
 
     from .meshes import check_closed_surface
 

@@ -86,7 +86,7 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
 
     remade = gridsurface.grid_surface
     monkeypatch.setattr(gridsurface, "grid_surface",
-                        lambda V, F, cells, clean: gridded.append((cells, clean)) or remade(V, F, cells, clean))
+                        lambda V, F, cells, closed: gridded.append((cells, closed)) or remade(V, F, cells, closed))
     U, G = simplify.simplify_surface(V, F, 500)
     assert seen == [(len(F), 8_000)] and len(G) <= 500
     assert gridded == [(simplify.PROXY_CELLS, True)]  # a proxy: collapsed from the quick reduction's grid surface
