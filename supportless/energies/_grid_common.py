@@ -46,7 +46,7 @@ __all__ = [
 LEAVING, ENTERING, RISKY = 0, 1, 2
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def frame_bbox3(X):
     """Footprint and build plate of one pose in the frame of ``up``.
 
@@ -119,7 +119,7 @@ def grid_layout(umin, umax, wmin, wmax, R):
 # ---------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def edge(ax, ay, bx, by):
     """Canonical form of the directed edge a->b.
 
@@ -151,7 +151,7 @@ def edge(ax, ay, bx, by):
     return ax, ay, dx, dy, flip, tie
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def inside(e, px, py):
     """True when ``(px, py)`` is on the left of the canonical edge ``e`` (6 floats, :func:`edge`), ties broken."""
     ox, oy, dx, dy, flip, tie = e
@@ -161,7 +161,7 @@ def inside(e, px, py):
     return v * flip > 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def triangle_edges(ax, ay, bx, by, cx, cy, ccw):
     """The three canonical edges of a projected triangle, inside on their left.
 
@@ -183,7 +183,7 @@ def triangle_edges(ax, ay, bx, by, cx, cy, ccw):
     return edge(bx, by, ax, ay), edge(cx, cy, bx, by), edge(ax, ay, cx, cy)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def inside_triangle(edges, px, py):
     """Exact, tie-broken test of a ray at ``(px, py)`` against a projected triangle (:func:`triangle_edges`)."""
     e1, e2, e3 = edges
@@ -195,7 +195,7 @@ def inside_triangle(edges, px, py):
 # ---------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def triangle(X, F, f):
     """The corners of triangle ``f``: ``(ax, ay, az, bx, by, bz, cx, cy, cz)``
     from ``X`` (n, 3) float64 and ``F`` (f, 3) int64."""
@@ -205,7 +205,7 @@ def triangle(X, F, f):
     return X[i0, 0], X[i0, 1], X[i0, 2], X[i1, 0], X[i1, 1], X[i1, 2], X[i2, 0], X[i2, 1], X[i2, 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def face_normal(ax, ay, az, bx, by, bz, cx, cy, cz):
     """``(b - a) x (c - a)`` of a triangle in the frame of ``up``.
 
@@ -224,7 +224,7 @@ def face_normal(ax, ay, az, bx, by, bz, cx, cy, cz):
     return e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z, e1x * e2y - e1y * e2x
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def risk_code(cosf, tau):
     """Crossing code of a face with ``cosf = n . up`` (outward unit normal).
 
@@ -241,7 +241,7 @@ def risk_code(cosf, tau):
     return LEAVING
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _sort_segment(zs, cs, s0, s1):
     """Stable insertion sort of ``zs[s0:s1]`` (float64 heights of one ray's few
     crossings), with ``cs`` (int8 codes) alongside."""
@@ -257,7 +257,7 @@ def _sort_segment(zs, cs, s0, s1):
         cs[j + 1] = ck
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _sweep_ray(zs, cs, s0, s1, zplate, inter, sup):
     """Sweep the sorted crossings ``zs[s0:s1]`` (float64, codes ``cs`` int8) of one ray upwards.
 

@@ -55,7 +55,7 @@ _CROSSINGS_PER_PIXEL = 8
 _NOT_FLAGGED = -(1 << 30)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _face_code(orient, nxv, nyv, nzv, tau, support):
     """Crossing code of a face from its normal ``(nxv, nyv, nzv)`` (frame of ``up``, ``nzv != 0``).
 
@@ -101,7 +101,7 @@ def _flag_rays(cnt, sat, nx, ny):
             sat[(j + 1) * w + i + 1] = sat[j * w + i + 1] + acc
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _flagged_in_box(sat, nx, i_lo, i_hi, j_lo, j_hi):
     """Number of flagged rays in the pixel box ``[i_lo, i_hi] x [j_lo, j_hi]`` (``sat`` of :func:`_flag_rays`)."""
     w = nx + 1

@@ -48,7 +48,7 @@ def section_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, above:
     V = np.ascontiguousarray(V[None] if single else V)
     U = np.broadcast_to(np.asarray(up, np.float64), (len(V), 3))
     U = np.ascontiguousarray(U / np.linalg.norm(U, axis=1, keepdims=True))
-    level = np.ascontiguousarray(np.broadcast_to(np.asarray(above, np.float64), (len(V),)))
+    level = np.broadcast_to(np.asarray(above, np.float64), (len(V),)).copy()  # writable: one compiled kernel
     area = _sections(V, np.ascontiguousarray(faces, np.int64), U, level)
     return float(area[0]) if single else area
 

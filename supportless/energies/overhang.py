@@ -185,7 +185,7 @@ def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0, ori
         orient = np.broadcast_to(np.asarray(orient, np.float64), (V.shape[0],)).copy()
     if backend == "numpy":
         return (*_numpy(V, F, u, orient, tau, float(floor)), single)
-    U = np.ascontiguousarray(np.broadcast_to(u, (V.shape[0], V.shape[-1])))
+    U = np.broadcast_to(u, (V.shape[0], V.shape[-1])).copy()  # writable, like every caller's: one compiled kernel
     if V.shape[-1] == 3:
         mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
         out = _kernel3(V, F, U, orient, tau, mask, float(floor))

@@ -105,7 +105,7 @@ def prepare(vertices, faces, up):
 # ---------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def signed_volume3(X, F):
     """Signed volume enclosed by one pose's triangles (numba).
 
@@ -133,7 +133,7 @@ def signed_volume3(X, F):
     return t / 6.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def signed_area2(X, F):
     """Signed area of one pose's planar triangles (numba): :func:`signed_volume3` for
     ``X`` (n, 2) float64; positive when counter-clockwise."""
