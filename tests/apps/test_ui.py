@@ -428,7 +428,7 @@ def test_page_in_chromium(rig, tmp_path, chromium, monkeypatch):
                 executable_path=chromium,
                 args=["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
                       "--disable-background-networking"])
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            page = browser.new_page(viewport={"width": 960, "height": 640})  # the size of test_ui_page's
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(app.url)
             energies = page.locator("li", has_text="Objective:").locator("..")

@@ -8,6 +8,10 @@ them, failed under ``CI=true``), and the steps that need a model on screen (the 
 preview, Slice, the locked bone) each open the built-in ``tpose`` figure themselves (:func:`figure`),
 so they run in a clone with no ``../shared`` beside it. Each step saves a screenshot to
 ``test-artifacts/ui-*.png`` for a person to look at.
+
+No step waits a fixed time for the page: a step that needs the page to show what the app sent asks the page a
+question behind it (:func:`_drawn`), and a measured view is taken once two screenshots in a row agree
+(:func:`_view_shot`).
 """
 
 from __future__ import annotations
@@ -68,15 +72,19 @@ def page(app, chromium):
 def figure(app, page, tpose_rig):
     """The built-in ``tpose`` figure (no shared data needed), opened afresh for one test; the page shows it.
 
-    Opening it resets the pose, the locks and the view; the page is reloaded so that it holds only the new
-    model's panel, never a widget of the model shown before.
+    Opening it resets the pose, the locks and the view. The page holds only the new model's panel, never a widget
+    of the model shown before: its widgets are found by their ids (viser's uuids) once the page has applied what
+    the app sent (:func:`_drawn`).
     """
+    old = [h._impl.uuid for h in (app.panel.bone, app.panel.lock)] if app.rig is not None else []
     app.open_rig(tpose_rig, rig_print_frame(tpose_rig))
     assert app.wait_idle(60)
-    page.reload()
-    bones = page.get_by_role("combobox").first  # the bone list: the panel of a model has been drawn
+    _drawn(app)
+    bones = page.locator(f"[id='{app.panel.bone._impl.uuid}']")  # the bone list of the new panel
     bones.wait_for(timeout=60000)
-    assert _until(lambda: bones.input_value() == tpose_rig.bone_names()[0], 30)
+    assert all(page.locator(f"[id='{u}']").count() == 0 for u in old)  # the last model's panel is gone
+    assert page.get_by_role("combobox").first.input_value() == tpose_rig.bone_names()[0]
+    _close_notices(page)  # a reloaded page would have none: the last test's do not cover this one's controls
     return tpose_rig
 
 
@@ -88,15 +96,20 @@ def _wait_text(page, pattern: str, timeout: float = 120000) -> None:
     page.wait_for_function("p => new RegExp(p).test(document.body.innerText)", arg=pattern, timeout=timeout)
 
 
-def _shot(page, name: str) -> bytes:
-    """A screenshot (PNG bytes), also saved for a person to look at."""
+def _close_notices(page) -> None:
+    """Close the notices on the page (they cover the view, and the controls under them)."""
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
-    for close in page.locator(".mantine-Notification-root button").all():  # notices cover the view
+    for close in page.locator(".mantine-Notification-root button").all():
         try:
             close.click(timeout=1000)
-        except PlaywrightTimeout:
+        except PlaywrightTimeout:  # closed by itself meanwhile
             pass
+
+
+def _shot(page, name: str) -> bytes:
+    """A screenshot (PNG bytes), also saved for a person to look at."""
+    _close_notices(page)
     ARTIFACTS.mkdir(exist_ok=True)
     png = page.screenshot()
     (ARTIFACTS / f"ui-{name}.png").write_bytes(png)
@@ -116,39 +129,66 @@ def _luminance(rgb: np.ndarray) -> np.ndarray:
     return c @ np.array([0.2126, 0.7152, 0.0722])
 
 
+def _drawn(app) -> None:
+    """Wait until the page has applied all the app sent it so far (a wait for a state, not a delay).
+
+    The page applies the app's messages in order, a frame's worth at a time, and applies a scene change in the
+    frame that reads it; a read of its local storage is answered in turn, so its answer comes after the messages
+    sent before it. (viser's ``get_render`` promises as much, but draws the view twice more, about a second a call here.)
+    """
+    for client in app.server.get_clients().values():
+        client.local_storage.get_item("supportless-test-fence", timeout=120)
+
+
+def _view_shot(page, app, clip: dict) -> np.ndarray:
+    """The 3D view (``clip``: where it is on the page) once the page has drawn it and it stays still.
+
+    After :func:`_drawn`, shots until two in a row are the same: the camera glides to a new model over a few
+    frames, and the page draws only when something changed (viser renders on demand).
+    """
+    _drawn(app)
+    end = time.monotonic() + 120  # a hang guard, not a verdict: a still view is the same shot twice
+    last = page.screenshot(clip=clip)
+    while time.monotonic() < end:
+        png = page.screenshot(clip=clip)
+        if png == last:
+            return _pixels(png)
+        last = png
+    pytest.fail("the 3D view did not stay still for two screenshots in 120 s")
+
+
 def model_on_screen(page, app, name: str) -> tuple[float, float]:
     """Where the model's surface is on screen: the view with it and without it, compared.
 
     Returns
     -------
     share : float
-        Share of the view's pixels the surface covers.
+        Share of the page's pixels (the whole view, panel included) the surface covers.
     contrast : float
         WCAG contrast ratio of the surface's median luminance against what is behind it there.
     """
+    _drawn(app)
     _shot(page, name)  # as the user sees it; measured without the support columns in front of the body
+    box = page.locator("canvas").first.bounding_box()
+    size = page.viewport_size
+    clip = {"x": max(box["x"], 0), "y": max(box["y"], 0)}  # the 3D view: the rest of the page is the same in both
+    clip |= {"width": min(box["x"] + box["width"], size["width"]) - clip["x"],
+             "height": min(box["y"] + box["height"], size["height"]) - clip["y"]}
     app.set_view(show_support=False)
     assert app.wait_idle(60)
-    time.sleep(0.5)
-    with_model = _pixels(page.screenshot())
+    with_model = _view_shot(page, app, clip)
     app.scene.h_mesh.visible = False
     try:
-        mask = np.zeros(with_model.shape[:2], bool)
-        end = time.monotonic() + 15
-        while time.monotonic() < end:  # until the page has drawn the view without it
-            without = _pixels(page.screenshot())
-            mask = np.abs(with_model - without).sum(axis=-1) > 30
-            if mask.mean() > 0:
-                break
-            time.sleep(0.3)
+        without = _view_shot(page, app, clip)
     finally:
         app.scene.h_mesh.visible = True
         app.set_view(show_support=True)
+    mask = np.abs(with_model - without).sum(axis=-1) > 30
     if not mask.any():
         return 0.0, 1.0
     a = float(np.median(_luminance(with_model[mask])))
     b = float(np.median(_luminance(without[mask])))
-    return float(mask.mean()), (max(a, b) + 0.05) / (min(a, b) + 0.05)
+    return float(mask.sum() / (size["width"] * size["height"])), (max(a, b) + 0.05) / (min(a, b) + 0.05)
 
 
 def _drop(page, paths) -> None:
