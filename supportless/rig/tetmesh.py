@@ -112,7 +112,7 @@ def tetrahedralize_with_skeleton_or_remake(vertices: np.ndarray, faces: np.ndarr
         crossing = len(intersecting_faces(vertices, faces))
         if crossing == 0:
             raise first from None
-    V, F = winding_surface(np.asarray(vertices, np.float64), np.asarray(faces, np.int64))
+    V, F = winding_surface(np.asarray(vertices, np.float64), np.asarray(faces, np.int64), WINDING_CELLS)
     TV, TT = tetrahedralize_with_skeleton(V, F, joints, bones, samples_per_bone)
     note = (f"the surface crosses itself ({crossing} pairs of triangles) and TetGen could not mesh it: remade as the "
             f"surface of its winding number on a {WINDING_CELLS}-cell grid ({len(faces)} -> {len(F)} triangles); "

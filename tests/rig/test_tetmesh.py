@@ -67,8 +67,11 @@ def test_a_surface_that_cuts_itself_still_gets_a_volume_mesh_with_its_vertices_f
 
 
 @pytest.mark.slow
-def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
+def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton(monkeypatch):
     """OBJ + TGF of two boxes pushed through each other: TetGen refuses, the winding-number surface is meshed."""
+    from supportless.files import printbody
+
+    monkeypatch.setattr(printbody, "WINDING_CELLS", 60)  # the remaking is the subject, not the grid's fineness
     from supportless.copyleft.cgal import intersecting_face_pairs
     from supportless.files.meshes import check_closed_surface
     from supportless.rig.tetmesh import tetrahedralize_with_skeleton_or_remake
@@ -88,8 +91,11 @@ def test_a_surface_that_crosses_itself_is_remade_for_tetgen_with_its_skeleton():
 
 
 @pytest.mark.slow
-def test_prepare_rig_of_a_crossing_surface_says_so_and_is_clean():
+def test_prepare_rig_of_a_crossing_surface_says_so_and_is_clean(monkeypatch):
     import supportless as sl
+    from supportless.files import printbody
+
+    monkeypatch.setattr(printbody, "WINDING_CELLS", 60)  # the remaking is the subject, not the grid's fineness
     from supportless.copyleft.cgal import intersecting_face_pairs
 
     V, F = crossing_boxes()
