@@ -141,8 +141,8 @@ def grid_surface(V, F, cells: int, closed: bool | None = None):
         # a point within a hair of the surface may be on the other side of it from its column, moved by that hair:
         # libigl's winding number decides those few, as it decides every point of an open surface
         on = np.flatnonzero(near.ravel())[d2 <= (ON_SURFACE * h) ** 2]
-        decided = igl.fast_winding_number(V, F, np.ascontiguousarray(grid[on])) > 0.5 if len(on) else None
-        if decided is not None and np.any(decided != inside.ravel()[on]):
+        decided = igl.fast_winding_number(V, F, np.ascontiguousarray(grid[on])) > 0.5
+        if np.any(decided != inside.ravel()[on]):
             inside = inside.ravel()
             inside[on] = decided
             inside = inside.reshape(nz, ny, nx)
