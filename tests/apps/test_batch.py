@@ -90,11 +90,11 @@ def test_meshes_sharing_a_name_are_one_failed_model(folder):
 
 
 @pytest.mark.slow
-def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path):
+def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path, warm_cache):
     from supportless.apps.cli import main
 
     out = tmp_path / "out"
-    args = ["batch", str(folder), "-o", str(out), "--workers", "2", "--cache-dir", str(tmp_path / "cache"), *FAST]
+    args = ["batch", str(folder), "-o", str(out), "--workers", "2", "--cache-dir", str(warm_cache), *FAST]
     first = CliRunner().invoke(main, args)
     assert first.exit_code == 1, first.output  # some models failed
     rows = _summary(out)
@@ -135,7 +135,7 @@ def _free_port():
 
 
 @pytest.mark.slow
-def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
+def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path, warm_cache):
     dask = Path(sys.executable).with_name("dask")
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
@@ -148,7 +148,7 @@ def test_the_same_run_on_a_real_scheduler_and_worker(folder, tmp_path):
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
         out = tmp_path / "out"
         run = subprocess.run([str(EXE), "batch", str(folder), "-o", str(out), "--scheduler", address,
-                              "--cache-dir", str(tmp_path / "cache"), "-q", *FAST],
+                              "--cache-dir", str(warm_cache), "-q", *FAST],
                              capture_output=True, text=True, timeout=600, env=env)
         assert run.returncode == 1, run.stderr  # the two broken models
         rows = _summary(out)
