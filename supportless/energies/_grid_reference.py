@@ -228,7 +228,6 @@ def _pose2(X, E, orient, R, tau):
     return inter * cell, sup * cell
 
 
-@njit(cache=True, parallel=True)
 def grid_batch(X, S, orient, R, tau):
     """The reference ray grid over a batch, parallel over poses.
 
@@ -249,15 +248,32 @@ def grid_batch(X, S, orient, R, tau):
     -------
     out : (P, 2) float64
         Self-intersection volume (area) and support column volume (area) per
-        pose: :func:`_pose3` or :func:`_pose2`.
+        pose: :func:`_pose3` or :func:`_pose2`, each compiled only for the
+        dimension it serves (a 2D figure's first run does not compile the 3D
+        rasteriser).
     """
+    return (_batch3 if X.shape[2] == 3 else _batch2)(X, S, orient, R, tau)
+
+
+@njit(cache=True, parallel=True)
+def _batch3(X, S, orient, R, tau):
+    """:func:`grid_batch` of 3D poses."""
     P = X.shape[0]
     out = np.zeros((P, 2), np.float64)
     for p in prange(P):
-        if X.shape[2] == 3:
-            a, b = _pose3(X[p], S, orient[p], R, tau)
-        else:
-            a, b = _pose2(X[p], S, orient[p], R, tau)
+        a, b = _pose3(X[p], S, orient[p], R, tau)
+        out[p, 0] = a
+        out[p, 1] = b
+    return out
+
+
+@njit(cache=True, parallel=True)
+def _batch2(X, S, orient, R, tau):
+    """:func:`grid_batch` of 2D poses."""
+    P = X.shape[0]
+    out = np.zeros((P, 2), np.float64)
+    for p in prange(P):
+        a, b = _pose2(X[p], S, orient[p], R, tau)
         out[p, 0] = a
         out[p, 1] = b
     return out
