@@ -14,7 +14,7 @@ from supportless.apps.ui import opener
 from supportless.apps.ui.filament import support_lead
 from supportless.apps.ui.panel import lead_markdown
 from supportless.apps.ui.readout import broken_rules, filament_text, grams, volume_text
-from supportless.apps.ui.scene import column_boxes
+from supportless.apps.ui.columns import column_boxes, column_shell
 from supportless.apps.ui.slicerun import SliceRun, slice_markdown
 from supportless.apps.ui.state import EditorState
 from supportless.base.errors import InputError
@@ -94,6 +94,49 @@ def test_column_boxes_are_closed_boxes_of_the_columns_volume():
         box = trimesh.Trimesh(V[8 * k:8 * k + 8], F[12 * k:12 * k + 12] - 8 * k, process=False)
         assert box.is_watertight and box.volume == pytest.approx(heights[k] * 0.49)  # outward: positive
         assert np.allclose(box.vertices.mean(axis=0), bottoms[k] + heights[k] / 2 * basis[2])
+
+
+def _right_handed(seed):
+    Q, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    return Q * np.sign(np.linalg.det(Q))
+
+
+def test_the_column_shell_of_a_block_is_its_outside_only():
+    """Four equal columns on a 2 x 2 grid: one closed box of 8 top and foot triangles and 16 outer wall ones."""
+    import trimesh
+
+    basis, cell = _right_handed(4), 0.5
+    feet = np.c_[np.array([[0, 0], [1, 0], [0, 1], [1, 1]]) * cell + 3.0, np.zeros(4)] @ basis
+    V, F = column_shell(feet, np.full(4, 2.0), cell, basis)
+    block = trimesh.Trimesh(V, F)  # welded
+    assert len(F) == 32 and block.is_watertight and block.volume == pytest.approx(4 * 2.0 * cell ** 2)
+    assert block.area == pytest.approx(2 * (2 * cell) ** 2 + 4 * (2 * cell) * 2.0)  # a 1 x 1 x 2 box's
+
+
+def test_the_column_shell_encloses_the_columns_volume_and_is_seen_from_outside():
+    """Random columns (feet at different heights, cells holding two columns, empty cells): the shell's signed
+    volume is the columns' (its walls face out, the inner ones cancel or are gone), it never has more triangles
+    than the boxes, and a point inside a column is inside it (winding number 1), one beside all is outside."""
+    import igl
+
+    rng, basis, cell = np.random.default_rng(5), _right_handed(6), 0.4
+    ij = np.array([(i, j) for i in range(12) for j in range(12) if rng.random() < 0.7], np.float64)
+    twice = ij[rng.random(len(ij)) < 0.25]
+    ij = np.r_[ij, twice]
+    foot = np.r_[rng.uniform(0, 1, len(ij) - len(twice)), rng.uniform(5, 6, len(twice))]
+    heights = np.r_[rng.uniform(0.1, 3, len(ij) - len(twice)), rng.uniform(0.1, 1, len(twice))]
+    feet = np.c_[ij * cell - 2.0, foot] @ basis
+    V, F = column_shell(feet, heights, cell, basis)
+    Vb, Fb = column_boxes(feet, heights, cell, basis)
+    assert len(F) <= len(Fb)
+    signed = np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6
+    assert signed == pytest.approx(heights.sum() * cell ** 2, rel=1e-12)
+    centres = feet + heights[:, None] / 2 * basis[2]
+    outside = np.array([[-20.0, 0.0, 0.0]]) @ basis
+    w = igl.winding_number(V, F, np.r_[centres, outside])  # exact: the sum of solid angles
+    assert np.allclose(w[:-1], 1.0, atol=1e-6) and abs(w[-1]) < 1e-6
+    area = lambda V, F: np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum() / 2
+    assert area(V, F) < area(Vb, Fb)  # less to blend through
 
 
 # --------------------------------------------------------------------------- #

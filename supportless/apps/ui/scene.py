@@ -19,8 +19,9 @@ from typing import Callable
 import numpy as np
 
 from ...energies.surface import boundary_edges
+from .columns import column_shell
 
-__all__ = ["Scene", "column_boxes", "draw_welcome", "matrix_from_quat", "placement3", "quat_from_matrix", "to3",
+__all__ = ["Scene", "draw_welcome", "matrix_from_quat", "placement3", "quat_from_matrix", "to3",
            "transforms3"]
 
 # colours (RGB 0-255)
@@ -155,37 +156,6 @@ def support_levels(V3: np.ndarray, F: np.ndarray, up: np.ndarray, risky: np.ndar
         return np.zeros(len(F), np.int64)
     top = max(float(need[risky].max()), 1e-30)
     return np.digitize(need / top, [1 / 3, 2 / 3])
-
-
-def column_boxes(bottoms: np.ndarray, heights: np.ndarray, cell: float, basis: np.ndarray):
-    """Square columns as one triangle mesh (outward faces).
-
-    Parameters
-    ----------
-    bottoms : (c, 3) float64
-        The centre of each column's foot.
-    heights : (c,) float64
-    cell : float
-        The side of each column's square section.
-    basis : (3, 3) float64
-        Rows: the section's two sides and the columns' direction, orthonormal and right-handed.
-
-    Returns
-    -------
-    V : (8c, 3) float64
-    F : (12c, 3) int64
-    """
-    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0],
-                        [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], np.float64)
-    box = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
-                    [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]], np.int64)
-    c = len(heights)
-    local = np.broadcast_to(corners, (c, 8, 3)).copy()
-    local[..., :2] *= cell / 2
-    local[..., 2] *= np.asarray(heights, np.float64)[:, None]
-    V = (np.asarray(bottoms, np.float64)[:, None, :] + local @ basis).reshape(-1, 3)
-    F = (box[None] + 8 * np.arange(c)[:, None, None]).reshape(-1, 3)
-    return V, F
 
 
 def draw_welcome(server, text: str) -> None:
@@ -462,7 +432,8 @@ class Scene:
         self._overlay(key, (np.stack([a, b, c], 1) + lift * 0.002 * self.size * n[:, None, :]).reshape(-1, 3), color)
 
     def draw_support(self, columns) -> None:
-        """The predicted support as a translucent body: one box per column of the ray grid.
+        """The predicted support as a translucent body: the outer surface of the ray grid's columns
+        (:func:`.columns.column_shell`; no walls between neighbours to blend through).
 
         Parameters
         ----------
@@ -474,7 +445,7 @@ class Scene:
             self._overlay("support", np.zeros((0, 3)), SUPPORT_COLOR)
             return
         bottoms, heights, cell, basis = columns
-        V, F = column_boxes(self.scale * np.asarray(bottoms), self.scale * np.asarray(heights), self.scale * cell,
+        V, F = column_shell(self.scale * np.asarray(bottoms), self.scale * np.asarray(heights), self.scale * cell,
                             basis)
         self._overlay("support", V[F].reshape(-1, 3), SUPPORT_COLOR, opacity=SUPPORT_OPACITY)
 
