@@ -6,10 +6,7 @@ It finds exactly the crossings of the reference kernel
 faster because
 
 * the batch runs in one parallel call that computes each pose's orientation
-  and frame coordinates itself, into per-thread buffers allocated once and
-  kept for the next call of the same Python thread (:func:`_scratch`: fresh
-  arrays cost their page faults again, a third of a search's call of four
-  poses on a 10 000-triangle proxy);
+  and frame coordinates itself, into per-thread buffers allocated once;
 * every triangle scans the ray centres of its bounding box in one flat loop
   with incremental floating-point edge functions: centres surely inside are
   kept, surely outside dropped, and the few within ``_SPAN_EPS`` cells of an
@@ -23,8 +20,6 @@ A pose whose crossings overflow the buffers is recomputed by the reference kerne
 """
 
 from __future__ import annotations
-
-import threading
 
 import numba
 import numpy as np
@@ -371,7 +366,20 @@ def ray_grid3_fast(V, F, up, R, tau, support):
         As :func:`supportless.energies.raygrid.ray_grid`; poses overflowing
         the buffers come from :func:`._grid_reference.grid_batch`.
     """
-    xbuf, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat = _scratch(V.shape[1], R)
+    threads = numba.config.NUMBA_NUM_THREADS
+    npix = R * R
+    cap = _CROSSINGS_PER_PIXEL * npix + 1024
+    xbuf = np.empty((threads, V.shape[1], 3), np.float64)
+    pix = np.empty((threads, cap), np.int32)
+    zz = np.empty((threads, cap), np.float64)
+    cc = np.empty((threads, cap), np.int8)
+    zs = np.empty((threads, cap), np.float64)
+    cs = np.empty((threads, cap), np.int8)
+    cnt = np.empty((threads, npix), np.int32)
+    start = np.empty((threads, npix), np.int64)
+    ubuf = np.empty((threads, npix), np.int64)
+    ufac = np.empty((threads, npix), np.int64)
+    sat = np.empty((threads, (R + 1) * (R + 1)), np.int32)
     out, ok = _grid3_fast(V, F, frame_matrix(up), R, float(tau), bool(support), xbuf, pix, zz, cc, cnt, start, zs,
                           cs, ubuf, ufac, sat)
     if not ok.all():
@@ -380,38 +388,3 @@ def ray_grid3_fast(V, F, up, R, tau, support):
         orient = np.ascontiguousarray(orientation_sign(Vb, F))
         out[bad] = _grid_reference.grid_batch(to_frame(Vb, up), F, orient, R, float(tau))
     return out
-
-
-_kept = threading.local()
-
-
-def _scratch(n, R):
-    """The kernel's per-thread buffers for ``n`` vertices on ``R`` cells, kept for this Python thread's next call.
-
-    Each is written before it is read in every pose (the kernel never relies on their content), so reusing them
-    changes no value. Only the last size is kept (about 16 MB at R = 192 with two numba threads); two Python
-    threads (the browser app's drawing and a search) never share them.
-
-    Returns
-    -------
-    xbuf : (threads, >= n, 3) float64
-    pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat
-        As :func:`_grid3_fast`, one row per numba thread.
-    """
-    threads = numba.config.NUMBA_NUM_THREADS
-    key = (threads, R, _CROSSINGS_PER_PIXEL)
-    kept = getattr(_kept, "buffers", None)
-    if kept is None or kept[0] != key:
-        npix = R * R
-        cap = _CROSSINGS_PER_PIXEL * npix + 1024
-        kept = (key, np.empty((threads, 0, 3), np.float64), np.empty((threads, cap), np.int32),
-                np.empty((threads, cap), np.float64), np.empty((threads, cap), np.int8),
-                np.empty((threads, npix), np.int32), np.empty((threads, npix), np.int64),
-                np.empty((threads, cap), np.float64), np.empty((threads, cap), np.int8),
-                np.empty((threads, npix), np.int64), np.empty((threads, npix), np.int64),
-                np.empty((threads, (R + 1) * (R + 1)), np.int32))
-    if kept[1].shape[1] < n:  # the frame coordinates grow with the largest surface seen
-        kept = (kept[0], np.empty((threads, n, 3), np.float64)) + kept[2:]
-    _kept.buffers = kept
-    return kept[1:]
-

@@ -220,28 +220,3 @@ def test_fast_kernel_is_bit_identical_to_the_reference(two_bunnies, resolution):
     assert np.all(ref > 0)
     # the numpy path: same crossings, sums in another order
     np.testing.assert_allclose(ray_grid(V, F, up, resolution, tau, backend="numpy"), ref, rtol=1e-9)
-
-
-def test_the_kept_buffers_change_no_value_and_are_the_threads_own(two_bunnies):
-    """The fast kernel's scratch is kept between calls (:func:`_grid_fast._scratch`): calls alternating the
-    surface, its size and the resolution give the reference's bits each time, a buffer dirtied by a larger
-    surface included; another Python thread gets buffers of its own."""
-    import threading
-
-    V, F = two_bunnies
-    small_V, small_F = overlapping_boxes()
-    small_V, small_F, _, _ = prepare(small_V, small_F, "z")
-    up = np.array([0.0, 1.0, 0.0])
-    for resolution in (48, 48, 11, 48):
-        assert_fast_is_reference(V, F, up, resolution, 0.5)  # the bunnies fill the buffers first
-        assert_fast_is_reference(small_V, small_F, np.array([0.0, 0.0, 1.0]), resolution, 0.5)
-    for junk in _grid_fast._scratch(len(V[0]), 48):
-        junk.fill(7)  # whatever a buffer holds, every pose writes before it reads
-    assert_fast_is_reference(V, F, up, 48, 0.5)
-    mine = _grid_fast._scratch(len(V[0]), 48)
-    assert mine[0] is _grid_fast._scratch(10, 48)[0]  # kept, and large enough for fewer vertices
-    theirs = []
-    thread = threading.Thread(target=lambda: theirs.append(_grid_fast._scratch(len(V[0]), 48)))
-    thread.start()
-    thread.join()
-    assert not any(np.shares_memory(a, b) for a, b in zip(mine, theirs[0]))
