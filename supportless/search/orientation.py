@@ -88,7 +88,9 @@ def candidate_ups(vertices: np.ndarray, faces: np.ndarray, hull_faces: int = 24,
     Nf = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
     weight = np.linalg.norm(Nf, axis=1)
     unit = Nf / np.where(weight > 0, weight, 1.0)[:, None]
-    k = min(clusters, len(F))
+    # a boxy model has fewer distinct normals than clusters: k-means would leave clusters empty (and say so on the
+    # user's terminal), so it asks for at most as many as there are
+    k = min(clusters, len(np.unique(np.round(unit, 12), axis=0)))
     centroids, labels = kmeans2(unit, k, seed=rng if rng is not None else np.random.default_rng(0),
                                 minit="++")
     cluster_down = _unit_rows(np.array([(unit[labels == c] * weight[labels == c, None]).sum(axis=0)

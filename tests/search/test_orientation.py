@@ -36,6 +36,22 @@ def test_a_rod_lying_flat_is_cheapest_printed_upright():
     assert support.min() < 1e-9 * rank_ups(V, F, [[0.0, 1.0, 0.0]])[0]  # a flat end on the plate: none
 
 
+def test_a_boxy_model_gets_its_candidates_without_a_warning():
+    """Two boxes have six distinct normals, fewer than the twelve clusters asked: k-means is asked for six (no
+    empty cluster, nothing printed on the user's terminal)."""
+    import warnings
+
+    boxes = trimesh.util.concatenate([trimesh.creation.box([1.0, 2.0, 3.0]),
+                                      trimesh.creation.box([1.0, 1.0, 1.0]).apply_translation([0.0, 3.0, 0.0])])
+    V, F = np.asarray(boxes.vertices), np.asarray(boxes.faces, np.int64)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ups = candidate_ups(V, F, clusters=12)
+    np.testing.assert_allclose(np.linalg.norm(ups, axis=1), 1.0, atol=1e-12)
+    assert np.allclose(ups[:6] @ ups[:6].T, [[1, -1, 0, 0, 0, 0], [-1, 1, 0, 0, 0, 0], [0, 0, 1, -1, 0, 0],
+                                             [0, 0, -1, 1, 0, 0], [0, 0, 0, 0, 1, -1], [0, 0, 0, 0, -1, 1]])
+
+
 def test_candidates_are_at_least_min_angle_apart(tpose_rig):
     ups = candidate_ups(tpose_rig.vertices, tpose_rig.faces, min_angle_deg=15.0)
     cos = ups @ ups.T
