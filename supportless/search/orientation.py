@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..base.geometry import row_groups
 from ..energies.overhang import overhang_energy
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 
@@ -90,7 +91,7 @@ def candidate_ups(vertices: np.ndarray, faces: np.ndarray, hull_faces: int = 24,
     unit = Nf / np.where(weight > 0, weight, 1.0)[:, None]
     # a boxy model has fewer distinct normals than clusters: k-means would leave clusters empty (and say so on the
     # user's terminal), so it asks for at most as many as there are
-    k = min(clusters, len(np.unique(np.round(unit, 12), axis=0)))
+    k = min(clusters, len(row_groups(np.round(unit, 12))[0]))
     centroids, labels = kmeans2(unit, k, seed=rng if rng is not None else np.random.default_rng(0),
                                 minit="++")
     cluster_down = _unit_rows(np.array([(unit[labels == c] * weight[labels == c, None]).sum(axis=0)
