@@ -291,7 +291,7 @@ def depth_below(V: np.ndarray, F: np.ndarray):
 
 def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,
                        path=None, tolerance: float = JOINT_OUTSIDE_TOLERANCE,
-                       within: float = 0.0) -> tuple[np.ndarray, list[str]]:
+                       within: float = 0.0, reach: float = 0.5) -> tuple[np.ndarray, list[str]]:
     """Move joints that lie just outside a closed surface inside it, along one of their bones.
 
     Real skeletons put tips (fingertips, toe tips, the top of the head, a root
@@ -318,6 +318,11 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
     within : float
         Also move joints less than this deep inside (fraction of the height):
         a glTF rig's joints on the skin, for bones sampled into the volume.
+    reach : float
+        How far along the bone (share of its length) a joint may move when the bone's first half lies
+        outside: the first half is searched first, as always; a larger ``reach`` then searches on to it.
+        A simplified proxy thins a fingertip so its bone enters it only past the middle
+        (:data:`supportless.rig.rig.PROXY_JOINT_REACH`).
 
     Returns
     -------
@@ -360,6 +365,11 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
         d = depth_of(points)
         deep = np.flatnonzero(d >= margin)
         s = int(deep[0]) if len(deep) else int(np.argmax(d))
+        if d[s] <= 0 and reach > 0.5:  # the bone's first half is outside: on along it, up to reach
+            points = a + np.linspace(0.5, reach, 2 + round(100 * (reach - 0.5)))[1:, None] * (b - a)
+            d = depth_of(points)
+            deep = np.flatnonzero(d >= margin)
+            s = int(deep[0]) if len(deep) else int(np.argmax(d))
         if d[s] <= 0:
             raise InputError(path, f"joint {i + 1} lies {100 * -depth[i] / height:.2f} % of the model's height "
                              f"outside the surface and bone {incident[k] + 1} does not enter it; "

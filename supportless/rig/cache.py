@@ -26,7 +26,7 @@ __all__ = ["ARRAYS", "CACHE_VERSION", "default_cache_dir", "gltf_cache_file", "r
            "write_entry"]
 
 #: Bumped whenever what a rig holds, or how it is prepared, changes: older entries are prepared again.
-CACHE_VERSION = 7
+CACHE_VERSION = 8
 
 #: The rig's arrays an entry holds.
 ARRAYS = ("vertices", "faces", "joints", "bones", "tet_vertices", "tets", "tet_weights", "up")

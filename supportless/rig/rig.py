@@ -38,6 +38,12 @@ __all__ = ["Rig", "compute_weights", "default_cache_dir", "prepare_rig", "rig_ca
 PROXY_FACES = 20000
 PROXY_TARGET = 10000
 
+#: How far along its bone a joint may move into a dense surface's simplified proxy (share of the bone's length,
+#: :func:`~supportless.files.joints.pull_joints_inside`'s ``reach``): simplification thins fingertips, and the
+#: 29k-triangle Mannequin's proxy lost the first 65 % of a fingertip bone, so its proxy was refused and the
+#: search ran on the full surface (4x slower). The proxy's joints only place its weights; the rig keeps its own.
+PROXY_JOINT_REACH = 0.9
+
 #: Surface vertices within this fraction of the model's height of its lowest
 #: point rest on the build plate (:attr:`Rig.contact_vertices`).
 CONTACT_TOLERANCE = 0.01
@@ -598,7 +604,7 @@ def _coarse_volume(V, F, J, B, up, samples_per_bone, bbw_iterations, skeleton_pa
             continue
         Vc, Fc = simplified
         try:
-            Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path)
+            Jc, _ = pull_joints_inside(Vc, Fc, J, B, up, skeleton_path, reach=PROXY_JOINT_REACH)
             with step("proxy: volume mesh and weights"):
                 TVc, TTc = tetrahedralize_with_skeleton(Vc, Fc, Jc, B, samples_per_bone)
                 Wc = compute_weights(TVc, TTc, Jc, B, bbw_iterations)

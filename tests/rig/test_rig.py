@@ -355,6 +355,32 @@ def test_a_joint_far_outside_is_refused():
         sl.prepare_rig(V, F, J, B, up="y")
 
 
+def test_a_tip_whose_bone_enters_past_its_middle_moves_only_with_a_longer_reach():
+    """A proxy's thinned fingertip: the bone's first half lies outside, so the default reach refuses the joint;
+    ``reach`` 0.9 moves it on along the bone to the first point the margin deep; a bone entering in its first half
+    gets the same point whatever the reach."""
+    import trimesh
+
+    from supportless.files.joints import pull_joints_inside
+
+    box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    V, F = np.asarray(box.vertices, np.float64), np.asarray(box.faces, np.int64)
+    J = np.array([[0.0, 0.49, 0.0], [0.0, 0.52, 0.0]])  # the tip 2 % of the height over the top; the bone 0.03 long
+    B = np.array([[0, 1]])
+    with pytest.raises(InputError, match="does not enter it"):
+        pull_joints_inside(V, F, J, B, "y")
+    moved, warnings = pull_joints_inside(V, F, J, B, "y", reach=0.9)
+    assert len(warnings) == 1 and warnings[0].startswith("joint 2 lay 2.00 %")
+    np.testing.assert_array_equal(moved[0], J[0])
+    assert moved[1][0] == 0.0 and moved[1][2] == 0.0
+    depth = 0.5 - moved[1][1]
+    assert rig_mod.JOINT_INSIDE_MARGIN <= depth < rig_mod.JOINT_INSIDE_MARGIN + 0.03 / 50  # the first such point
+    assert (0.52 - moved[1][1]) / 0.03 > 0.5  # past the bone's middle
+    V2, F2, J2, B2, _ = _branch_with_tip(0.01)
+    np.testing.assert_array_equal(pull_joints_inside(V2, F2, J2, B2, "y", reach=0.9)[0],
+                                  pull_joints_inside(V2, F2, J2, B2, "y")[0])
+
+
 def test_moved_joints_and_their_warning_survive_the_cache(tmp_path):
     V, F, J, B, _ = _branch_with_tip(0.01)
     sl.write_mesh(tmp_path / "b.stl", V, F)
