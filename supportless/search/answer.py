@@ -177,6 +177,10 @@ class Request:
         ``callback(iteration, info)``, as :func:`optimize`'s.
     intersects : callable or None
         The gate's exact check, ``intersects(angles (m, 3) float64) -> bool``.
+    turn_only : bool
+        With ``orient="free"``, run only the pose-and-turn phase (:data:`~supportless.search.optimizer.TURN_SHARE`
+        of the swarm) from ``start`` at ``start_rotation``: the free search of :func:`mirrored_or_free`, whose start
+        is the mirrored answer, already turned (the pose-only phase would search the poses printed upright).
     """
 
     objective: Objective | None = None
@@ -184,6 +188,7 @@ class Request:
     start_rotation: np.ndarray | None = None
     callback: Callable[[int, dict], bool | None] | None = None
     intersects: Callable[[np.ndarray], bool] | None = None
+    turn_only: bool = False
 
 
 def _as_mirror_images(rig: Rig, settings: SearchSettings, start: np.ndarray | None) -> bool:
@@ -200,7 +205,8 @@ def mirrored_or_free(rig: Rig, settings: SearchSettings, request: Request) -> Po
     :data:`SYMMETRY_SHARE` of its predicted support (``settings.symmetric`` None: the tool's choice).
 
     The mirrored search runs first; the free one starts from its answer with :data:`FREE_SHARE` of the
-    iterations (the mirrored answer is one of its particles: never worse by the objective). The progress
+    iterations, in one swarm phase (with ``orient="free"`` the pose-and-turn phase alone, ``Request.turn_only``;
+    the mirrored answer is one of its particles: never worse by the objective). The progress
     counts both (``phase`` says which). The answer's ``symmetry`` holds both predictions and which was kept:
     ``mode`` ("auto"), ``mirrored_mm`` and ``free_mm`` (mm of support filament, :func:`predicted_mm`; ``free_mm``
     None when the mirrored search was interrupted), ``share``, ``kept`` and ``runtime_seconds`` (both searches).
@@ -217,7 +223,7 @@ def mirrored_or_free(rig: Rig, settings: SearchSettings, request: Request) -> Po
             turn = answer.rotation if settings.orient == "free" else request.start_rotation
             runs[False] = one_answer(rig, settings.replace(symmetric=False, iterations=free_iterations),
                                      dataclasses.replace(request, start=answer.angles, start_rotation=turn,
-                                                         callback=inner))
+                                                         callback=inner, turn_only=True))
         seen["offset"] = seen["it"]
         if runs[mirrored].interrupted:
             break
@@ -240,7 +246,8 @@ def _one_count(callback, seen: dict, mirrored: bool, iterations: int, free_itera
     def inner(it, info):
         seen["it"] = seen["offset"] + it
         if mirrored and "total" not in seen:  # the first report is a swarm phase's: it knows the phases
-            seen["total"] = 2 * info["iterations"] - info["phases"] * (iterations - free_iterations)
+            # the free search: one swarm phase (pose and turn, or the pose alone with orient="keep") and the polish
+            seen["total"] = 2 * info["iterations"] - info["phases"] * iterations + free_iterations
         total = seen["total"] if mirrored else seen["offset"] + info["iterations"]
         word = "mirrored" if mirrored else "free"
         return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
@@ -263,7 +270,7 @@ def searched(rig: Rig, settings: SearchSettings, request: Request, t0: float) ->
     """
     objective = request.objective or settings.objective(rig)
     return _PoseSearch(rig, settings, objective, request.start, request.start_rotation, request.callback,
-                       request.intersects).run(t0)
+                       request.intersects, turn_only=request.turn_only).run(t0)
 
 
 def _on_proxy_then_full(rig: Rig, coarse: Rig, settings: SearchSettings, request: Request, t0: float) -> PoseResult:
@@ -308,7 +315,7 @@ def searched_on_proxy(coarse: Rig, full: Objective, settings: SearchSettings, re
     proxy = settings.objective(coarse, full.arap_data, full.volume)
     with step("searching on the proxy"):
         return _PoseSearch(coarse, settings.replace(polish=0), proxy, request.start, request.start_rotation,
-                           callback, request.intersects, rests=full.rests).run(t0)
+                           callback, request.intersects, rests=full.rests, turn_only=request.turn_only).run(t0)
 
 
 def on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:

@@ -66,7 +66,8 @@ def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
 def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tpose_rig, bunny_rig):
     """symmetric=None on a mirrored skeleton: both searches, the rule of SYMMETRY_SHARE on predicted support."""
     from supportless.search.naturalness import mirror_error_deg
-    from supportless.search.answer import FREE_SHARE, SYMMETRY_SHARE, predicted_mm
+    from supportless.search.answer import FREE_SHARE, SYMMETRY_SHARE, Request, one_answer, predicted_mm
+    from supportless.search.settings import SearchSettings
 
     rig = tpose_rig
     seen = []
@@ -74,9 +75,11 @@ def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tp
     info = auto.symmetry
     assert info["mode"] == "auto" and info["share"] == SYMMETRY_SHARE
     mirrored = sl.optimize(rig, particles=16, iterations=8, seed=0, symmetric=True)
-    # the free search starts from the mirrored answer, pose and turn, with a share of the iterations
-    free = sl.optimize(rig, particles=16, iterations=round(8 * FREE_SHARE), seed=0, symmetric=False,
-                       start=mirrored.angles, start_rotation=mirrored.rotation)
+    # the free search starts from the mirrored answer, pose and turn, with a share of the iterations, in the
+    # pose-and-turn phase alone
+    free = one_answer(rig, SearchSettings(particles=16, iterations=round(8 * FREE_SHARE), seed=0, symmetric=False),
+                      Request(start=mirrored.angles, start_rotation=mirrored.rotation, turn_only=True))
+    assert {i["phase"] for _, i in seen if i["phase"].startswith("free")} == {"free: pose and turn"}
     assert mirrored.symmetry is None and free.symmetry is None  # forced either way: one search
     assert info["mirrored_mm"] == pytest.approx(predicted_mm(rig, mirrored))  # the same searches, the same seed
     assert info["free_mm"] == pytest.approx(predicted_mm(rig, free))
