@@ -150,6 +150,8 @@ def strength_rows(report: dict) -> list[tuple[str, str, str, str]]:
 
 def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
     """One line per answer weighed, and who chose."""
+    from ..search.choice import REST_STRENGTH_TOLERANCE
+
     for i, c in enumerate(choice.candidates):
         sliced = "" if c.sliced_mm is None else f", {label} {c.sliced_mm:.0f} mm"
         mark = ("  <- chosen" if i == choice.chosen else "") + \
@@ -160,6 +162,7 @@ def _print_choice(console, choice, slicer_tried, label="PrusaSlicer"):
     console.print(f"  chosen by {who}: {choice.reason}")
     refused = (choice.strength or {}).get("refused") or []
     if refused:
-        console.print(f"  left out as weaker than the rest pose (safety {choice.strength['rest_safety_factor']}) and "
+        console.print(f"  left out as weaker than the rest pose (safety {choice.strength['rest_safety_factor']}, "
+                      f"less {100 * REST_STRENGTH_TOLERANCE:g} %) and "
                       f"{choice.strength['floor']:g}: " + ", ".join(
                           f"{r['kind']} {r['predicted_mm']:.0f} mm (safety {r['safety_factor']})" for r in refused))

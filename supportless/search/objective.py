@@ -434,8 +434,9 @@ class Objective:
         """Whether the pose ``angles (m, 3) float64`` crosses itself other than by contact within the rules.
 
         CGAL's exact test (stopping at the first crossing when no contact is allowed); a pose that crosses is
-        then judged by :meth:`Rig.crossings` with :attr:`contact` and its ray-grid overlap, from the pairs of
-        one CGAL call. False in 2D.
+        then judged by :meth:`Rig.crossings` with :attr:`contact` from the pairs of one CGAL call, and last by
+        its ray-grid overlap (measured only for a pose the other rules allow: the volume rule is the verdict's
+        last). False in 2D.
         """
         rig = self.rig
         if rig.dim != 3:
@@ -446,8 +447,10 @@ class Objective:
         pairs = intersecting_faces(V, rig.faces)
         if not len(pairs):
             return False
+        if not rig.crossings(V, rig.posed_joints(angles), self.contact, None, pairs).allowed:
+            return True
         overlap = float(np.asarray(self._intersection(V[None]))[0])
-        return not rig.crossings(V, rig.posed_joints(angles), self.contact, overlap, pairs).allowed
+        return bool(rig.rest_volume) and overlap > self.contact.volume * rig.rest_volume  # contact_verdict's rule
 
     def combine(self, terms: dict) -> np.ndarray:
         """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""

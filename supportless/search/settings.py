@@ -178,8 +178,9 @@ class SearchSettings:
         The printed height of the rest pose along up, mm (the print frame's), for ``footprint_mm2`` and strength.
     min_safety : float
         The choice among answers (:func:`supportless.search.choice.strong_enough`) never hands back one whose safety
-        factor (:func:`supportless.energies.strength.analyse_strength`) is below both the rest pose's, as it stands,
-        and this. Default :data:`MIN_SAFETY`; 0: strength is not weighed.
+        factor (:func:`supportless.energies.strength.analyse_strength`) is below both the rest pose's, as it stands
+        (less :data:`supportless.search.choice.REST_STRENGTH_TOLERANCE`), and this. Default :data:`MIN_SAFETY`; 0:
+        strength is not weighed.
     material : str
         The filament (one of :data:`MATERIAL_NAMES`) the strength is judged in; the CLI takes the printer
         profile's.

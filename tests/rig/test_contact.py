@@ -156,3 +156,16 @@ def test_the_depth_scan_finds_the_depths_a_tree_per_part_finds(tpose_rig, pose, 
     assert scanned and scanned.keys() == tree.keys()
     for key in tree:
         assert scanned[key] == pytest.approx(tree[key], rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("rules", [ContactRules(), ContactRules(volume=1e-9), ContactRules(depth=0.01)])
+def test_the_search_gate_is_the_verdict_with_its_overlap(tpose_rig, rules):
+    """Objective.forbidden judges the pairs first and measures the overlap only for a pose the other rules allow:
+    the same yes or no as the whole verdict with the overlap, the volume rule included."""
+    objective = sl.SearchSettings().objective(tpose_rig)
+    objective.contact = rules
+    for turns in ({}, ARM_DOWN, HAND_TO_HEAD):
+        A = turned(tpose_rig, turns)
+        assert objective.forbidden(A) == (not verdict(tpose_rig, A, rules).allowed)
+    # the three rules decide differently on the arm let down: allowed, too much volume, too deep
+    assert [objective.forbidden(turned(tpose_rig, ARM_DOWN))] == [rules != ContactRules()]

@@ -152,6 +152,12 @@ def test_the_choice_refuses_answers_weaker_than_both_the_rest_pose_and_the_floor
     assert record["refused"] == [weak] and weak.safety_factor == 0.2 and weak.breaks_at_n == 0.4
     summary = strength_record(record, kept, 0, rest_mm=100.0)
     assert summary["changed_choice"] and "0.4 N" in summary["changed_reason"]  # the least support was the weak one
+    # as strong as the rest pose within REST_STRENGTH_TOLERANCE counts as strong as it (the analysis moves that
+    # much when the rest pose is turned a degree or two); below that, refused
+    tolerance = choice_mod.REST_STRENGTH_TOLERANCE
+    near, under = answer(0.5 * (1 - 0.9 * tolerance), 20.0), answer(0.5 * (1 - 1.1 * tolerance), 15.0)
+    kept, record = strong_enough(rig, [under, near, strong], settings)
+    assert kept == [near, strong] and record["refused"] == [under]
     # a stronger rest pose: the floor decides
     rig_strong = SimpleNamespace(dim=3, rest_angles=lambda: np.full((1, 3), 5.0))
     kept, _ = strong_enough(rig_strong, [answer(0.2, 10.0), answer(1.5, 50.0)], settings)
