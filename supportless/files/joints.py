@@ -353,7 +353,9 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
                          "check the skeleton belongs to this model and uses the same units")
     warnings = []
     margin = JOINT_INSIDE_MARGIN * height
-    t = np.linspace(0.0, 0.5, 51)[1:]
+    # the bone's first half, then (with a longer reach, where the first half is outside) on to the reach
+    spans = [np.linspace(0.0, 0.5, 51)[1:]] + ([np.linspace(0.5, reach, 2 + round(100 * (reach - 0.5)))[1:]]
+                                               if reach > 0.5 else [])
     for i in outside[np.argsort(depth[outside])[::-1]]:  # nearest the skin first
         incident = np.flatnonzero((bones == i).any(axis=1))
         if len(incident) == 0:
@@ -361,15 +363,13 @@ def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: 
         others = np.where(bones[incident, 0] == i, bones[incident, 1], bones[incident, 0])
         k = int(np.argmax(depth[others]))
         a, b = joints[i], joints[others[k]]
-        points = a + t[:, None] * (b - a)
-        d = depth_of(points)
-        deep = np.flatnonzero(d >= margin)
-        s = int(deep[0]) if len(deep) else int(np.argmax(d))
-        if d[s] <= 0 and reach > 0.5:  # the bone's first half is outside: on along it, up to reach
-            points = a + np.linspace(0.5, reach, 2 + round(100 * (reach - 0.5)))[1:, None] * (b - a)
+        for t in spans:
+            points = a + t[:, None] * (b - a)
             d = depth_of(points)
             deep = np.flatnonzero(d >= margin)
             s = int(deep[0]) if len(deep) else int(np.argmax(d))
+            if d[s] > 0:
+                break
         if d[s] <= 0:
             raise InputError(path, f"joint {i + 1} lies {100 * -depth[i] / height:.2f} % of the model's height "
                              f"outside the surface and bone {incident[k] + 1} does not enter it; "

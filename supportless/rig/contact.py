@@ -79,6 +79,11 @@ class ContactRules:
     def allows_contact(self) -> bool:
         return self.hops >= 0
 
+    def covers_too_much(self, overlap_volume: float | None, body_volume: float | None) -> bool:
+        """The verdict's last rule: the volume covered twice is over ``volume`` of the body's (unchecked when
+        either is None or the body's is 0)."""
+        return overlap_volume is not None and bool(body_volume) and overlap_volume > self.volume * body_volume
+
 
 @dataclass
 class ContactVerdict:
@@ -265,7 +270,7 @@ def contact_verdict(parts: BodyParts, vertices: np.ndarray, posed_joints: np.nda
         if ratio > rules.depth:
             return ContactVerdict(False, k, f"{names(vb)} presses {ratio:.2f} of its thickness into {names(ob)} "
                                   f"(at most {rules.depth:.2f})", regions, volume)
-    if overlap_volume is not None and body_volume and overlap_volume > rules.volume * body_volume:
+    if rules.covers_too_much(overlap_volume, body_volume):
         return ContactVerdict(False, k, f"the contact covers {overlap_volume / body_volume:.1%} of the body's "
                               f"volume twice (at most {rules.volume:.0%})", regions, volume)
     return ContactVerdict(True, k, "", regions, volume)

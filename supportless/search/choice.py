@@ -64,9 +64,9 @@ SAME_DEGREES = 0.5
 
 #: An answer as strong as the rest pose within this share counts as strong as it (:func:`strong_enough`): the
 #: strength analysis moves by that much when the rest pose itself is turned by one or two degrees (its layers cut
-#: the weakest part elsewhere; 1-3 % on 13 of 14 zoo figures and characters, up to 7 % on the Fox,
-#: benchmarks/RESULTS.md "Strength of a pose"). Without it a figure weak at rest (the Mannequin's ankles, 0.25)
-#: had every answer refused for reading 0.2499, and the rest pose was handed back.
+#: the weakest part elsewhere; at 1 degree 0.2-3 % on 13 of 14 zoo figures and characters, 7.5 % on the Fox:
+#: benchmarks/RESULTS.md, "Ratios in one process, ..., a weak rest pose"). Without it a figure weak at rest (the
+#: glTF Mannequin's ankles, 0.25) had every answer refused for reading 0.25 as well, and got its rest pose back.
 REST_STRENGTH_TOLERANCE = 0.05
 
 

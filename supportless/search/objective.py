@@ -449,8 +449,7 @@ class Objective:
             return False
         if not rig.crossings(V, rig.posed_joints(angles), self.contact, None, pairs).allowed:
             return True
-        overlap = float(np.asarray(self._intersection(V[None]))[0])
-        return bool(rig.rest_volume) and overlap > self.contact.volume * rig.rest_volume  # contact_verdict's rule
+        return self.contact.covers_too_much(float(np.asarray(self._intersection(V[None]))[0]), rig.rest_volume)
 
     def combine(self, terms: dict) -> np.ndarray:
         """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""
