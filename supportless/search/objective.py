@@ -512,7 +512,8 @@ class Objective:
         return self.bounded_overlap(angles, bound, rotations)[0]
 
     def bounded_overlap(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None,
-                        intersection_bound: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+                        intersection_bound: float | None = None, measured: dict | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`bounded`, and the self-intersection volume it computed on the way.
 
         Parameters
@@ -532,6 +533,12 @@ class Objective:
             gets the larger of their sum and ``intersection_bound`` (it
             cannot become the swarm's best: another pose of the batch costs
             less).
+        measured : dict, optional
+            Filled with the normalised terms (as :meth:`terms`, but posed with
+            the search's weights) of the poses whose every term was measured,
+            the self-intersection too: ``"index"`` (r,) int64, their positions
+            in the batch, and each term's (r,) float64. The search shows them
+            as its best's progress instead of measuring the best again.
 
         Returns
         -------
@@ -543,24 +550,33 @@ class Objective:
             nowhere two layers deep, so a volume above rounding means the pose
             does intersect itself (the search's exact gate skips CGAL there).
         """
-        return self._bounded_overlap(angles, np.broadcast_to(np.asarray(bound, np.float64), (len(angles),)),
-                                     rotations, np.inf if intersection_bound is None else float(intersection_bound))
+        values, overlap, terms = self._bounded_overlap(
+            angles, np.broadcast_to(np.asarray(bound, np.float64), (len(angles),)), rotations,
+            np.inf if intersection_bound is None else float(intersection_bound))
+        if measured is not None:
+            index = np.flatnonzero(np.isfinite(terms["intersection"]))
+            measured.clear()
+            measured.update({"index": index} | {key: v[index] for key, v in terms.items()})
+        return values, overlap
 
     def _bounded_overlap(self, angles, bound, rotations, intersection_bound=np.inf):
-        """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule."""
+        """:meth:`bounded_overlap` with ``bound`` (P,) float64: in chunks, without the poses that break a rule; the
+        normalised terms of the poses measured in full as a third value (NaN elsewhere)."""
         chunk = self._chunk()
         if len(angles) > chunk:
             parts = [self._bounded_overlap(angles[i:i + chunk], bound[i:i + chunk],
                                            None if rotations is None else rotations[i:i + chunk],
                                            intersection_bound)
                      for i in range(0, len(angles), chunk)]
-            return np.concatenate([v for v, _ in parts]), np.concatenate([o for _, o in parts])
+            return (np.concatenate([v for v, _, _ in parts]), np.concatenate([o for _, o, _ in parts]),
+                    {key: np.concatenate([t[key] for _, _, t in parts]) for key in parts[0][2]})
         excess = np.asarray(self.prior.excess(angles), np.float64)
         # past a joint limit, against a bound that keeps the rules: INFEASIBLE + excess is a lower bound above it
         values, overlap = INFEASIBLE + excess, np.zeros(len(excess))
+        terms = {key: np.full(len(excess), np.nan) for key in ("arap", "overhang", "intersection", "prior", "violation")}
         keep = np.flatnonzero((excess <= 0) | (bound >= INFEASIBLE))
         if len(keep) == 0:
-            return values, overlap
+            return values, overlap, terms
         if len(keep) < len(angles):
             angles, bound, excess = angles[keep], bound[keep], excess[keep]
             rotations = None if rotations is None else rotations[keep]
@@ -571,16 +587,16 @@ class Objective:
         overhang = np.asarray(self.overhang(V, rotations), np.float64)
         kept = self.w_overhang * (overhang / self.overhang_scale) + self.w_prior * prior
         todo = np.flatnonzero(kept < bound)
-        arap = np.zeros(len(kept))
+        arap, violation = np.zeros(len(kept)), np.zeros(len(kept))
         if len(todo):
             arap[todo] = arap_mod.arap_energy(self.arap_data, transforms[todo], backend=self.backend)
             kept[todo] += self.w_arap * (arap[todo] / self.volume)
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
-            violation = (excess[todo] + self.posed_violation(transforms[todo], V[todo])
-                         + self.footprint_shortfall(V[todo], None if rotations is None else rotations[todo]))
+            violation[todo] = (excess[todo] + self.posed_violation(transforms[todo], V[todo])
+                               + self.footprint_shortfall(V[todo], None if rotations is None else rotations[todo]))
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
-                       "intersection": 0.0, "violation": violation}
+                       "intersection": 0.0, "violation": violation[todo]}
             kept[todo] = self.combine(self.normalise(partial))
             todo = todo[kept[todo] < np.minimum(bound[todo], intersection_bound)]
         if len(todo) and self.w_intersect != 0:
@@ -590,11 +606,17 @@ class Objective:
                 rest = np.setdiff1d(todo, measured, assume_unique=True)
                 kept[rest] = np.maximum(kept[rest], intersection_bound)
             else:
+                measured = todo
                 inter = np.asarray(self._intersection(V[todo]), np.float64)
                 overlap[keep[todo]] = inter
                 kept[todo] += self.intersection_cost(inter / self.volume)
+            at = keep[measured]
+            for key, raw in (("arap", arap), ("overhang", overhang), ("prior", prior), ("violation", violation)):
+                terms[key][at] = raw[measured]
+            terms["intersection"][at] = overlap[at]
+            terms = self.normalise(terms)
         values[keep] = kept
-        return values, overlap
+        return values, overlap, terms
 
     def _intersect_best_first(self, V, todo, kept, overlap, keep) -> np.ndarray:
         """Add the self-intersection cost to ``kept[todo]``, the least partial sums first, :data:`INTERSECT_CHUNK`

@@ -154,25 +154,35 @@ class _PoseSearch:
         iterations = settings.iterations if iterations is None else iterations
         o, to_angles, to_rotation = self.variables(turns)
 
+        measured: dict = {}  # the terms of the poses of this iteration measured in full, by position
+
         def f(X, bound):
             R = rotations_from_params(X[:, k:], rig.up) if turns else None
             # the self-intersection only for poses that could become the swarm's best (the least of the personal
             # bests): a particle's own best is judged by the other terms, the swarm's by all, then exactly
-            values, overlap = objective.bounded_overlap(to_angles(X), bound, R, intersection_bound=np.min(bound))
+            batch: dict = {}
+            values, overlap = objective.bounded_overlap(to_angles(X), bound, R, intersection_bound=np.min(bound),
+                                                        measured=batch)
             self.overlapping.clear()
             certain = max(OVERLAP_CERTAIN, objective.overlap_allowed) * objective.volume  # past any allowed contact
             self.overlapping.update(X[i].tobytes() for i in np.flatnonzero(overlap > certain))
+            measured.update({X[i].tobytes(): {key: float(batch[key][j]) for key in batch if key != "index"}
+                             for j, i in enumerate(batch["index"])})
             return values
 
-        def terms_of(x):
-            return objective.terms(to_angles(x[None]), to_rotation(x)[None] if turns else None)
+        def terms_of(x):  # the swarm's new best was measured in full as it was found; else (a bound of 0) measured
+            known = measured.get(x.tobytes())
+            return known if known is not None else \
+                {key: float(v[0]) for key, v in objective.terms(to_angles(x[None]), to_rotation(x)[None]
+                                                                if turns else None).items()}
 
         best_terms = _Timed(terms_of, self.stats, "progress")
         last = {}
 
         def on_iteration(it, x, value):
             if last.get("x") is None or not np.array_equal(last["x"], x):  # the best changed
-                last["x"], last["terms"] = x.copy(), {key: float(v[0]) for key, v in best_terms(x).items()}
+                last["x"], last["terms"] = x.copy(), best_terms(x)
+            measured.clear()  # the next iteration's best is this one or one of its poses
             terms = last["terms"]
             for key in self.term_history:
                 self.term_history[key].append(terms[key])

@@ -14,7 +14,9 @@ measurement is not.
 
 The figures were recorded at commit de15cad (before the answer's stages became
 :mod:`supportless.search.answer`; the same refactor left 20fa53c's figures identical too, before that
-commit's cuts to the search changed them in their last digits) with ``../shared`` beside the project, by::
+commit's cuts to the search changed them in their last digits; the small search's ``term_history`` was
+recorded again when the progress began showing the search's own measure of its best, posed with its pruned
+weights: nothing else moved) with ``../shared`` beside the project, by::
 
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record            # the test's small search
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record defaults   # the command's own defaults

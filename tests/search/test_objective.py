@@ -241,6 +241,33 @@ def test_the_self_intersection_is_measured_only_where_a_pose_could_become_the_ba
     assert measured == [30]
 
 
+def test_the_terms_of_the_poses_measured_in_full_are_handed_back_as_terms_gives_them(rig, monkeypatch):
+    """``measured``: exactly the poses whose self-intersection was measured, each with the terms :meth:`terms`
+    gives (the same weights), in chunks too; the search shows them as its best's progress."""
+    from supportless.search import objective as objective_mod
+
+    obj = sl.Objective(rig)
+    obj.__dict__["search_lbs"] = rig.lbs  # the rig's own weights, as terms() pose
+    A = random_angles(rig, 30, scale=1.5, seed=11)
+    terms = obj.terms(A)
+    others = obj.combine(terms | {"intersection": np.zeros(30)})
+    cut = float(np.median(others))
+    monkeypatch.setattr(objective_mod, "POSE_CHUNK", 7)  # the positions are the batch's across chunks
+    for bound, intersection_bound in ((np.full(30, np.inf), cut), (np.full(30, np.inf), None),
+                                      (np.where(np.arange(30) % 2 == 0, np.inf, -np.inf), None)):
+        measured = {"stale": 1}
+        values, overlap = obj.bounded_overlap(A, bound, intersection_bound=intersection_bound, measured=measured)
+        index = measured.pop("index")
+        assert set(measured) == set(terms) and 1 <= len(index) <= 30
+        if intersection_bound is None:  # every pose below its own bound, and only those
+            np.testing.assert_array_equal(index, np.flatnonzero(bound == np.inf))
+        else:  # those whose overlap the search measured: the least costly first
+            assert len(index) < np.sum(others < cut)
+        for key, v in measured.items():
+            np.testing.assert_allclose(v, terms[key][index], rtol=1e-12, atol=1e-15)
+        np.testing.assert_allclose(values[index], obj.combine(terms)[index], rtol=1e-12)
+
+
 def test_a_big_batch_is_measured_in_chunks_with_the_same_values(rig, monkeypatch):
     from supportless.search import objective as objective_mod
 

@@ -498,8 +498,8 @@ def test_the_searchs_shortcuts_decide_as_the_whole_objective_would(monkeypatch):
     bounded = Objective.bounded_overlap
     monkeypatch.setattr(Objective, "bounded_overlap",  # no bound: every pose gets every term (the
                         # self-intersection, as in the search, where the others are below the swarm's best)
-                        lambda self, angles, bound, rotations=None, intersection_bound=None: bounded(
-                            self, angles, np.full(len(angles), np.inf), rotations, intersection_bound))
+                        lambda self, angles, bound, rotations=None, intersection_bound=None, measured=None: bounded(
+                            self, angles, np.full(len(angles), np.inf), rotations, intersection_bound, measured))
     full = sl.optimize(rig, settings)
     assert short_posed < 0.9 * sum(posed)  # the shortcuts did skip poses
     np.testing.assert_array_equal(short.angles, full.angles)
