@@ -7,9 +7,7 @@ started afresh and the signal sent once the search reached that evaluation (a pa
 ``Objective.bounded_overlap`` creates a file there: ``optimize_marked`` of ``tests/processes.py``, which
 ``tests/apps/test_cli_lifetime.py`` uses too); a moment counts as kept when the status is 130, the tool says
 the best pose so far is written, the posed mesh, the pose and the report are complete and the pose written
-is no worse than the rest pose. (The report's ``interrupted`` is the kept answer's: a figure with a mirror
-plane stopped during its free search keeps the finished mirrored answer when it is the better one, and that
-answer was not interrupted.) Prints one line per moment and ``k/6``.
+is no worse than the rest pose. Prints one line per moment and ``k/6``.
 
     python benchmarks/interrupt.py [--model demo:tpose] [--at 1 40 120 220 320 420] [--group]
 

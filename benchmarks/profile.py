@@ -62,9 +62,9 @@ MODELS = {
 STAGES = [
     ("supportless.rig.load", "load_rig", "load_rig (cold: tets, weights)"),
     ("supportless.search.answer", "optimize", "optimize (whole search, every search)"),
-    ("supportless.search.answer", "mirrored_or_free", "mirrored_or_free (both searches of a mirrored figure)"),
+    ("supportless.search.answer", "mirrored_answer", "mirrored_answer (the search of a mirrored figure)"),
     ("supportless.search.answer", "one_answer", "one_answer [{which}] (one search + choose + as_written)"),
-    ("supportless.search.answer", "predicted_mm", "predicted_mm (mirrored vs free)"),
+    ("supportless.search.answer", "predicted_mm", "predicted_mm (the mirrored answer's)"),
     ("supportless.search.answer", "_on_proxy_then_full", "_on_proxy_then_full (proxy search + full-surface stages)"),
     ("supportless.search.optimizer", "_PoseSearch.run", "_PoseSearch.run"),
     ("supportless.search.optimizer", "_PoseSearch.run_phase", "run_phase [{phase}]"),

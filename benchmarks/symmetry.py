@@ -30,7 +30,7 @@ import supportless as sl
 from supportless.files.printframe import REFERENCE_HEIGHT_MM
 from supportless.search.layout import find_mirror
 from supportless.search.naturalness import mirror_error_deg
-from supportless.search.answer import SYMMETRY_SHARE, predicted_mm
+from supportless.search.answer import predicted_mm
 from supportless.slicing.prusaslicer import slice_check
 
 HEADING = "## Symmetry"
@@ -103,7 +103,7 @@ def section(rows: list[dict], command: str) -> str:
             cells.append(f"{np.mean([reduction(r, k) for r, k in zip(chosen, kept)]):.1f} % "
                          f"({kept.count('free')} free)")
         lines.append(f"| {label} ({len(chosen)}) | " + " | ".join(cells) + " |")
-    lines += ["", f"`SYMMETRY_SHARE` = {SYMMETRY_SHARE:g}."]
+    lines += ["", "The tool searches a mirrored figure mirrored only (`supportless.search.answer.mirrored_answer`)."]
     return "\n".join(lines)
 
 

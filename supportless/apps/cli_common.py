@@ -148,7 +148,6 @@ _WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EP
 
 def _search_options(f):
     """The search's options; their defaults are :class:`~supportless.search.settings.SearchSettings`'s."""
-    from ..search.answer import SYMMETRY_SHARE
     from ..search.settings import RANGES, SearchSettings
 
     d = SearchSettings()
@@ -228,8 +227,7 @@ def _search_options(f):
                      help="Reject poses that touch the plate with a new part or would fall over."),
         click.option("--symmetric/--no-symmetric", default=d.symmetric,
                      help="Keep left/right pairs of bones mirror images (found from the rest skeleton), or pose "
-                          "each freely [default: for a figure with a mirror plane, mirrored unless the free pose "
-                          f"needs {100 * SYMMETRY_SHARE:g} % less predicted support]."),
+                          "each freely [default: mirrored for a figure whose rest skeleton has a mirror plane]."),
         click.option("--fix", multiple=True, help="Bones (1-based, TGF order) to keep fixed: --fix 3,4 or --fix 3 --fix 4."),
         click.option("--free", multiple=True, help="Bones to free even if fixed by default ('all' frees every bone)."),
     ]

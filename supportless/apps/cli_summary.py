@@ -73,10 +73,8 @@ def _summary_table(report: dict, verbose: bool = False):
         end = natural.get("chain_end_name") or f"bone {natural['chain_end']}"
         table.add_row("largest turn of a chain's end", "0°", f"{natural['largest_chain_turn_deg']:.0f}°", end)
     sym = report.get("symmetry")
-    if sym and sym.get("free_mm") is not None:
-        table.add_row("left and right", "mirrored", sym["kept"],
-                      f"predicted support: mirrored {sym['mirrored_mm']:,.0f} mm, free {sym['free_mm']:,.0f} mm "
-                      f"(free kept only {100 * sym['share']:.0f} % below)")
+    if sym:
+        table.add_row("left and right", "", sym["kept"], "the rest skeleton has a mirror plane")
     use = natural.get("joint_range")
     if use:
         table.add_row("named joint nearest its range", "", f"{use['angle_deg']:.0f}° of {use['limit_deg']:.0f}°",

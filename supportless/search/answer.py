@@ -3,9 +3,8 @@
 Each stage is a function from the :class:`~supportless.search.result.PoseResult` the stage before made to
 the next; a stage adds its own typed record to it (the arrow), in the order they run::
 
-    optimize             the tool's search: one_answer, or mirrored_or_free for a figure with a mirror plane
-    mirrored_or_free     a mirrored answer, then a free one from it; the mirrored kept unless the free one
-                         saves SYMMETRY_SHARE of its predicted support                     -> symmetry
+    optimize             the tool's search: one_answer, or mirrored_answer for a figure with a mirror plane
+    mirrored_answer      one_answer with left/right pairs of bones as mirror images        -> symmetry
     one_answer           one search's answer, through the stages below:
       searched           the swarm on the rig (a dense surface: on its simplified proxy)   -> stats
       on_full_surface    a proxy's best poses measured and checked on the full surface     -> full_surface
@@ -45,8 +44,8 @@ from .optimizer import _PoseSearch
 from .result import FullSurface, PoseResult, WrittenCheck, at_full_resolution, measured_at, written_verdict
 from .settings import SearchSettings
 
-__all__ = ["FREE_SHARE", "FULL_CHECKS", "NEXT_ANSWERS", "PROXY_POLISH_BUDGET", "SYMMETRY_SHARE", "Request",
-           "as_written", "chosen", "mirrored_or_free", "on_full_surface", "one_answer", "optimize", "polished",
+__all__ = ["FULL_CHECKS", "NEXT_ANSWERS", "PROXY_POLISH_BUDGET", "Request",
+           "as_written", "chosen", "mirrored_answer", "on_full_surface", "one_answer", "optimize", "polished",
            "predicted_mm", "searched", "searched_on_proxy"]
 
 
@@ -101,7 +100,7 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     settings = (settings or SearchSettings()).replace(**changes)
     request = Request(objective, start, start_rotation, callback, intersects)
     if _as_mirror_images(rig, settings, start):
-        return mirrored_or_free(rig, settings, request)
+        return mirrored_answer(rig, settings, request)
     return one_answer(rig, settings.replace(symmetric=bool(settings.symmetric)), request)
 
 
@@ -141,17 +140,6 @@ def one_answer(rig: Rig, settings: SearchSettings, request: Request) -> PoseResu
 PROXY_POLISH_BUDGET = 2_500_000
 
 
-#: A figure whose rest skeleton has a mirror plane is posed as mirror images unless the free search's
-#: answer needs this share less predicted support than the mirrored one's (``SearchSettings.symmetric``
-#: None). Chosen on the zoo and the shared models with PrusaSlicer (benchmarks/RESULTS.md, "Symmetry").
-SYMMETRY_SHARE = 0.10
-
-#: After the mirrored search, the free search starts from its answer (pose and turn) and runs this share of the
-#: iterations: it frees the pairs where that pays, from where the mirrored search ended, instead of searching the
-#: free space again from the rest pose (which kept its answer on none of the zoo's ten mirrored figures,
-#: benchmarks/RESULTS.md "Symmetry"; "Profile of the default answer" for the time it took).
-FREE_SHARE = 0.25
-
 #: How many of a proxy search's candidates are checked for exact intersections on the full surface at most.
 FULL_CHECKS = 10
 
@@ -177,10 +165,6 @@ class Request:
         ``callback(iteration, info)``, as :func:`optimize`'s.
     intersects : callable or None
         The gate's exact check, ``intersects(angles (m, 3) float64) -> bool``.
-    turn_only : bool
-        With ``orient="free"``, run only the pose-and-turn phase (:data:`~supportless.search.optimizer.TURN_SHARE`
-        of the swarm) from ``start`` at ``start_rotation``: the free search of :func:`mirrored_or_free`, whose start
-        is the mirrored answer, already turned (the pose-only phase would search the poses printed upright).
     """
 
     objective: Objective | None = None
@@ -188,11 +172,10 @@ class Request:
     start_rotation: np.ndarray | None = None
     callback: Callable[[int, dict], bool | None] | None = None
     intersects: Callable[[np.ndarray], bool] | None = None
-    turn_only: bool = False
 
 
 def _as_mirror_images(rig: Rig, settings: SearchSettings, start: np.ndarray | None) -> bool:
-    """Whether the tool chooses between a mirrored and a free answer: ``settings.symmetric`` None on a 3D figure
+    """Whether the tool poses a figure as mirror images: ``settings.symmetric`` None on a 3D figure
     with a mirror plane, from the rest pose or a start pose that keeps the mirror (one edited by hand that
     breaks it is searched freely: never worse than it)."""
     mirror = find_mirror(rig) if settings.symmetric is None and rig.dim == 3 else None
@@ -200,58 +183,19 @@ def _as_mirror_images(rig: Rig, settings: SearchSettings, start: np.ndarray | No
         rig, np.asarray(start, np.float64).reshape(-1, 3), mirror) < 1e-6)
 
 
-def mirrored_or_free(rig: Rig, settings: SearchSettings, request: Request) -> PoseResult:
-    """Both answers of a figure with a mirror plane, and the mirrored one unless the free one saves
-    :data:`SYMMETRY_SHARE` of its predicted support (``settings.symmetric`` None: the tool's choice).
+def mirrored_answer(rig: Rig, settings: SearchSettings, request: Request) -> PoseResult:
+    """The answer of a figure with a mirror plane (``settings.symmetric`` None): :func:`one_answer` with left/right
+    pairs of bones as mirror images.
 
-    The mirrored search runs first; the free one starts from its answer with :data:`FREE_SHARE` of the
-    iterations, in one swarm phase (with ``orient="free"`` the pose-and-turn phase alone, ``Request.turn_only``;
-    the mirrored answer is one of its particles: never worse by the objective). The progress
-    counts both (``phase`` says which). The answer's ``symmetry`` holds both predictions and which was kept:
-    ``mode`` ("auto"), ``mirrored_mm`` and ``free_mm`` (mm of support filament, :func:`predicted_mm`; ``free_mm``
-    None when the mirrored search was interrupted), ``share``, ``kept`` and ``runtime_seconds`` (both searches).
+    A second, free search from the mirrored answer, kept only when it predicted 10 % less support, was kept on none
+    of the 17 mirrored figures of the zoo and the shared glTF characters: it predicted the mirrored answer's support
+    on 13 and at most 3.7 % less on the others (benchmarks/RESULTS.md, "One search for a mirrored figure"). It is no
+    longer run. ``symmetry`` says so: ``mode`` ("auto"), ``kept`` ("mirrored") and ``mirrored_mm``, the answer's
+    support filament as the slicer model predicts it (:func:`predicted_mm`).
     """
-    runs, seen = {}, {"it": 0, "offset": 0}
-    free_iterations = max(1, round(FREE_SHARE * settings.iterations))
-    for mirrored in (True, False):
-        inner = None if request.callback is None else _one_count(request.callback, seen, mirrored,
-                                                                settings.iterations, free_iterations)
-        if mirrored:
-            runs[True] = one_answer(rig, settings.replace(symmetric=True), dataclasses.replace(request, callback=inner))
-        else:
-            answer = runs[True]
-            turn = answer.rotation if settings.orient == "free" else request.start_rotation
-            runs[False] = one_answer(rig, settings.replace(symmetric=False, iterations=free_iterations),
-                                     dataclasses.replace(request, start=answer.angles, start_rotation=turn,
-                                                         callback=inner, turn_only=True))
-        seen["offset"] = seen["it"]
-        if runs[mirrored].interrupted:
-            break
-    mirrored_mm = predicted_mm(rig, runs[True])
-    if False not in runs:
-        keep = runs[True]
-        free_mm = None
-    else:
-        free_mm = predicted_mm(rig, runs[False])
-        keep = runs[False] if free_mm < (1.0 - SYMMETRY_SHARE) * mirrored_mm else runs[True]
-    symmetry = {"mode": "auto", "mirrored_mm": mirrored_mm, "free_mm": free_mm, "share": SYMMETRY_SHARE,
-                "kept": "mirrored" if keep is runs[True] else "free",
-                "runtime_seconds": sum(r.runtime_seconds for r in runs.values())}
-    return dataclasses.replace(keep, symmetry=symmetry, runtime_seconds=symmetry["runtime_seconds"])
-
-
-def _one_count(callback, seen: dict, mirrored: bool, iterations: int, free_iterations: int):
-    """A callback for one of the two searches that reports to ``callback`` in one rising count (the mirrored
-    search runs ``iterations`` per swarm phase, the free one ``free_iterations``)."""
-    def inner(it, info):
-        seen["it"] = seen["offset"] + it
-        if mirrored and "total" not in seen:  # the first report is a swarm phase's: it knows the phases
-            # the free search: one swarm phase (pose and turn, or the pose alone with orient="keep") and the polish
-            seen["total"] = 2 * info["iterations"] - info["phases"] * iterations + free_iterations
-        total = seen["total"] if mirrored else seen["offset"] + info["iterations"]
-        word = "mirrored" if mirrored else "free"
-        return callback(seen["it"], info | {"iterations": total, "phase": f"{word}: {info.get('phase', '')}"})
-    return inner
+    answer = one_answer(rig, settings.replace(symmetric=True), request)
+    return dataclasses.replace(answer, symmetry={"mode": "auto", "kept": "mirrored",
+                                                 "mirrored_mm": predicted_mm(rig, answer)})
 
 
 def predicted_mm(rig: Rig, result: PoseResult) -> float:
@@ -270,7 +214,7 @@ def searched(rig: Rig, settings: SearchSettings, request: Request, t0: float) ->
     """
     objective = request.objective or settings.objective(rig)
     return _PoseSearch(rig, settings, objective, request.start, request.start_rotation, request.callback,
-                       request.intersects, turn_only=request.turn_only).run(t0)
+                       request.intersects).run(t0)
 
 
 def _on_proxy_then_full(rig: Rig, coarse: Rig, settings: SearchSettings, request: Request, t0: float) -> PoseResult:
@@ -315,7 +259,7 @@ def searched_on_proxy(coarse: Rig, full: Objective, settings: SearchSettings, re
     proxy = settings.objective(coarse, full.arap_data, full.volume)
     with step("searching on the proxy"):
         return _PoseSearch(coarse, settings.replace(polish=0), proxy, request.start, request.start_rotation,
-                           callback, request.intersects, rests=full.rests, turn_only=request.turn_only).run(t0)
+                           callback, request.intersects, rests=full.rests).run(t0)
 
 
 def on_full_surface(rig: Rig, found: PoseResult, objective: Objective, t0: float) -> PoseResult:

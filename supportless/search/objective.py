@@ -45,7 +45,7 @@ from ..rig.rig import Rig
 from .anatomy import JointRanges
 from .naturalness import chain_ends, head_bones, rotation_angle_deg
 from .prior import PosePrior
-from .relaxed import ArmDrops, without_drop
+from .relaxed import ArmDrops, arms_above, without_drop
 from .standing import Standing
 from .weights import (CHAIN_LIMIT, FOOTPRINT_MM2, HEAD_LIMIT, JOINT_LIMIT, W_ARAP, W_CHAIN, W_CONTACT, W_INTERSECT,
                       W_OVERHANG, W_PRIOR)
@@ -209,7 +209,7 @@ class Objective:
         self.chain_limit = None if chain_limit is None else float(chain_limit)
         self.w_chain = float(w_chain)
         self._ends = chain_ends(rig)
-        self._end_arms = _arms_above(rig, self._ends, drops)  # (k,) the dropped arm above each chain end, or -1
+        self._end_arms = arms_above(rig, self._ends, drops)  # (k,) the dropped arm above each chain end, or -1
         self.head_limit = None if head_limit is None else float(head_limit)
         self._heads = head_bones(rig) if head_limit is not None else np.zeros(0, np.int64)
         self.joint_ranges = joint_ranges
@@ -534,11 +534,9 @@ class Objective:
             cannot become the swarm's best: another pose of the batch costs
             less).
         measured : dict, optional
-            Filled with the normalised terms (as :meth:`terms`, but posed with
-            the search's weights) of the poses whose every term was measured,
-            the self-intersection too: ``"index"`` (r,) int64, their positions
-            in the batch, and each term's (r,) float64. The search shows them
-            as its best's progress instead of measuring the best again.
+            Filled with the normalised terms (as :meth:`terms`, posed with the search's weights) of the poses
+            measured in full, the self-intersection too: ``"index"`` (r,) int64, their positions in the batch,
+            and each term's (r,) float64 (the search's progress shows its best's).
 
         Returns
         -------
@@ -649,18 +647,3 @@ class Objective:
                 "joint_limits": np.degrees(self.prior.limits).tolist(), "keep_standing": self.keep_standing,
                 "support_floor": self.support_floor, "footprint_mm2": self.footprint_mm2,
                 "contact": None if self.contact is None else dataclasses.asdict(self.contact)}
-
-
-def _arms_above(rig: Rig, ends: np.ndarray, drops: ArmDrops | None) -> np.ndarray:
-    """(k,) int64: for each chain end, the index in ``drops`` of the named upper arm it hangs from in the
-    kinematic tree, -1 for none."""
-    out = np.full(len(ends), -1, np.int64)
-    if drops is None:
-        return out
-    where = {int(b): i for i, b in enumerate(drops.bones)}
-    for j, end in enumerate(ends):
-        b = int(end)
-        while b >= 0 and b not in where:
-            b = int(rig.parents[b])
-        out[j] = where.get(b, -1)
-    return out

@@ -82,7 +82,7 @@ class _PoseSearch:
     """
 
     def __init__(self, rig: Rig, settings: SearchSettings, objective: Objective, start, start_rotation, callback,
-                 intersects=None, polish_only: bool = False, rests=None, turn_only: bool = False):
+                 intersects=None, polish_only: bool = False, rests=None):
         self.rig, self.settings, self.objective, self.callback = rig, settings, objective, callback
         self.start, self.start_rotation = start, start_rotation
         self.base = np.zeros((rig.bone_count, 3)) if start is None else np.asarray(start, np.float64).reshape(-1, 3)
@@ -96,11 +96,8 @@ class _PoseSearch:
         self.term_history: dict = {"arap": [], "overhang": [], "intersection": []}
         self.turning = settings.orient == "free"
         # orient="free": the pose alone first (the whole swarm, as "keep"), then pose and turn together with part
-        # of the swarm (TURN_SHARE), started from the first phase's best pose upright and at the candidate directions;
-        # turn_only (the free search from a mirrored answer, already turned): the second phase alone
-        self.turn_only = bool(turn_only and self.turning)
-        pose_phase = [False] if self.k and not self.turn_only else []
-        self.turns = [] if polish_only else pose_phase + ([True] if self.turning else [])
+        # of the swarm (TURN_SHARE), started from the first phase's best pose upright and at the candidate directions
+        self.turns = [] if polish_only else ([False] if self.k else []) + ([True] if self.turning else [])
         self.polishing = (settings.polish or 0) if self.k or self.turning else 0
         self.total = settings.iterations * len(self.turns) + self.polishing
         self.overlapping: set = set()  # positions of the last batch whose ray grid saw two layers: they intersect
@@ -236,7 +233,7 @@ class _PoseSearch:
         for phase, turns in enumerate(self.turns):
             if turns:
                 initial = self.turn_starts(best, initial)
-                particles = max(2, settings.particles // TURN_SHARE) if phase or self.turn_only else settings.particles
+                particles = max(2, settings.particles // TURN_SHARE) if phase else settings.particles
             else:
                 particles = settings.particles
             now = self.run_phase(turns, initial, particles, phase * settings.iterations)

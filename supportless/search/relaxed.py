@@ -41,7 +41,8 @@ from ..base.kinematics import euler_to_matrix, matrix_to_euler
 from ..rig.rig import Rig
 from .anatomy import bone_parts
 
-__all__ = ["ARM_DROPS", "LIMB_SHARES", "ArmDrops", "arm_drops", "limb_bones", "relaxed_poses", "without_drop"]
+__all__ = ["ARM_DROPS", "LIMB_SHARES", "ArmDrops", "arm_drops", "arms_above", "limb_bones", "relaxed_poses",
+           "without_drop"]
 
 #: Degrees a named upper arm is turned down from its rest direction, one seed each (capped at hanging down).
 ARM_DROPS = (30.0, 45.0, 60.0, 75.0)
@@ -226,3 +227,18 @@ def relaxed_poses(rig: Rig, free: np.ndarray, limits_deg: np.ndarray) -> np.ndar
     moved = np.abs(out).reshape(len(out), -1).max(axis=1) > 1e-9
     out = out[moved]
     return out[np.sort(np.unique(np.round(out.reshape(len(out), -1), 9), axis=0, return_index=True)[1])]
+
+
+def arms_above(rig: Rig, ends: np.ndarray, drops: ArmDrops | None) -> np.ndarray:
+    """(k,) int64: for each chain end, the index in ``drops`` of the named upper arm it hangs from in the
+    kinematic tree, -1 for none."""
+    out = np.full(len(ends), -1, np.int64)
+    if drops is None:
+        return out
+    where = {int(b): i for i, b in enumerate(drops.bones)}
+    for j, end in enumerate(ends):
+        b = int(end)
+        while b >= 0 and b not in where:
+            b = int(rig.parents[b])
+        out[j] = where.get(b, -1)
+    return out

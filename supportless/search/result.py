@@ -210,12 +210,11 @@ class PoseResult:
         How the result was chosen among the search's best and the simpler
         answers (:func:`supportless.search.choice.choose`), or None when it was not.
     symmetry : dict or None
-        When the tool chose between a mirrored and a free pose
-        (``settings.symmetric`` None on a figure with a mirror plane):
-        ``mirrored_mm`` and ``free_mm`` (each answer's predicted support
-        filament at the reference height), ``share`` (what the free answer had
-        to save), ``kept`` (``"mirrored"`` or ``"free"``) and
-        ``runtime_seconds`` (both searches). None otherwise.
+        When the tool posed a figure with a mirror plane as mirror images
+        (``settings.symmetric`` None, :func:`supportless.search.answer.mirrored_answer`):
+        ``mode`` (``"auto"``), ``kept`` (``"mirrored"``) and ``mirrored_mm``
+        (the answer's predicted support filament at the reference height).
+        None otherwise.
     full_surface : FullSurface or None
         How a proxy search's answer was measured and polished on the full surface; None without a proxy.
     measured_faces : int or None

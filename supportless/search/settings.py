@@ -212,13 +212,9 @@ class SearchSettings:
     symmetric : bool or None
         True: keep left/right pairs of bones mirror images
         (:mod:`supportless.search.layout`); False: pose each bone freely;
-        None (the default): for a figure whose rest skeleton has a mirror
-        plane, search mirrored, then freely from that answer
-        (:data:`supportless.search.answer.FREE_SHARE` of the iterations),
-        and keep the mirrored pose unless the free
-        one needs :data:`supportless.search.answer.SYMMETRY_SHARE` less
-        predicted support (:func:`supportless.search.answer.optimize`); a
-        start pose that breaks the mirror is searched freely.
+        None (the default): mirrored for a figure whose rest skeleton has a
+        mirror plane, else free (:func:`supportless.search.answer.mirrored_answer`);
+        a start pose that breaks the mirror is searched freely.
     orient : {"free", "keep"}
         ``free``: search the print orientation with the pose (support is
         counted with the posed model turned by a rotation R,

@@ -565,12 +565,12 @@ def test_the_symmetry_and_anatomy_options_reach_the_search(branch_files, tmp_pat
     assert result.exit_code == 0, (result.output, result.exception)
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["settings"]["anatomy"] is anatomy
-    # the branch has a mirror plane (its arm lies in it): the tool's choice searches it both ways, and the
-    # settings reported are those of the search whose answer was kept
+    # the branch has a mirror plane (its arm lies in it): the tool's choice searches it mirrored, and the
+    # settings reported are that search's
     assert (report["symmetry"] is not None) == (symmetric is None)
     if symmetric is None:
-        assert report["symmetry"]["kept"] in ("mirrored", "free") and report["symmetry"]["mirrored_mm"] >= 0
-        symmetric = report["symmetry"]["kept"] == "mirrored"
+        assert report["symmetry"]["kept"] == "mirrored" and report["symmetry"]["mirrored_mm"] >= 0
+        symmetric = True
     assert report["settings"]["symmetric"] is symmetric
 
 

@@ -244,13 +244,10 @@ def test_search_streams_poses_and_is_one_undo_step(state, branch_rig):
     assert result is not None and not result.interrupted
     assert result.value <= start_value + 1e-12  # never worse than where it started
     assert np.array_equal(state.get_angles(), result.angles)
-    # orient="free" (the default): the pose-only phase and the turning phase, 4 iterations each, and the branch
-    # has a mirror plane: the mirrored search and the free one from its answer (SearchSettings.symmetric None,
-    # a share FREE_SHARE of the iterations, in the pose-and-turn phase alone)
-    from supportless.search.answer import FREE_SHARE
-
-    assert result.symmetry is not None
-    total = 2 * 4 + max(1, round(FREE_SHARE * 4))
+    # orient="free" (the default): the pose-only phase and the turning phase, 4 iterations each; the branch has a
+    # mirror plane, searched mirrored (SearchSettings.symmetric None) in that one search
+    assert result.symmetry is not None and result.symmetry["kept"] == "mirrored"
+    total = 2 * 4
     assert state.progress == {"iteration": total, "iterations": total, "value": result.value, "running": False,
                               "cancelled": False, "free_bones": int((~state.fixed).sum())}
     assert state.search_settings.particles == 10 and state.settings.particles == SearchSettings().particles

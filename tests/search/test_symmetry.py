@@ -63,35 +63,24 @@ def test_layout_keeps_every_point_of_the_box_within_the_limits(tpose_rig):
         np.testing.assert_allclose(layout.from_angles(layout.to_angles(inside[:1])[0]), inside[0], atol=1e-9)
 
 
-def test_the_tool_keeps_the_mirrored_pose_unless_the_free_one_saves_the_share(tpose_rig, bunny_rig):
-    """symmetric=None on a mirrored skeleton: both searches, the rule of SYMMETRY_SHARE on predicted support."""
+def test_the_tool_searches_a_mirrored_figure_mirrored_in_one_search(tpose_rig, bunny_rig):
+    """symmetric=None on a mirrored skeleton: the mirrored search alone, its answer and progress those of
+    symmetric=True, and ``symmetry`` saying so."""
+    from supportless.search.answer import predicted_mm
     from supportless.search.naturalness import mirror_error_deg
-    from supportless.search.answer import FREE_SHARE, SYMMETRY_SHARE, Request, one_answer, predicted_mm
-    from supportless.search.settings import SearchSettings
 
     rig = tpose_rig
     seen = []
     auto = sl.optimize(rig, particles=16, iterations=8, seed=0, callback=lambda it, info: seen.append((it, info)))
-    info = auto.symmetry
-    assert info["mode"] == "auto" and info["share"] == SYMMETRY_SHARE
     mirrored = sl.optimize(rig, particles=16, iterations=8, seed=0, symmetric=True)
-    # the free search starts from the mirrored answer, pose and turn, with a share of the iterations, in the
-    # pose-and-turn phase alone
-    free = one_answer(rig, SearchSettings(particles=16, iterations=round(8 * FREE_SHARE), seed=0, symmetric=False),
-                      Request(start=mirrored.angles, start_rotation=mirrored.rotation, turn_only=True))
-    assert {i["phase"] for _, i in seen if i["phase"].startswith("free")} == {"free: pose and turn"}
-    assert mirrored.symmetry is None and free.symmetry is None  # forced either way: one search
-    assert info["mirrored_mm"] == pytest.approx(predicted_mm(rig, mirrored))  # the same searches, the same seed
-    assert info["free_mm"] == pytest.approx(predicted_mm(rig, free))
-    kept_free = info["free_mm"] < (1 - SYMMETRY_SHARE) * info["mirrored_mm"]
-    assert info["kept"] == ("free" if kept_free else "mirrored")
-    np.testing.assert_array_equal(auto.angles, (free if kept_free else mirrored).angles)
-    mirror = find_mirror(rig)
-    assert mirror_error_deg(rig, mirrored.angles, mirror) == pytest.approx(0.0, abs=1e-6)
-    # the progress counts both searches in one rising count, each phase named
+    assert auto.symmetry == {"mode": "auto", "kept": "mirrored", "mirrored_mm": pytest.approx(predicted_mm(rig, auto))}
+    assert mirrored.symmetry is None  # forced: no choice to report
+    np.testing.assert_array_equal(auto.angles, mirrored.angles)
+    np.testing.assert_array_equal(auto.rotation, mirrored.rotation)
+    assert mirror_error_deg(rig, auto.angles, find_mirror(rig)) == pytest.approx(0.0, abs=1e-6)
+    # one search's progress: both swarm phases, counted to the end
     its = [it for it, _ in seen]
-    assert its == sorted(its) and {i["phase"].split(":")[0] for _, i in seen} == {"mirrored", "free"}
-    assert its == list(range(1, len(its) + 1)) and its[-1] == seen[-1][1]["iterations"]  # counted to the end
-    assert {i["iterations"] for _, i in seen} == {len(its)}  # the whole count known from the start
-    # a skeleton without a mirror plane: one free search, nothing to choose
+    assert its == list(range(1, 2 * 8 + 1)) and {i["iterations"] for _, i in seen} == {2 * 8}
+    assert [i["phase"] for _, i in seen] == ["pose"] * 8 + ["pose and turn"] * 8
+    # a skeleton without a mirror plane: one free search, nothing to report
     assert sl.optimize(bunny_rig, particles=8, iterations=2, seed=0, orient="keep").symmetry is None
