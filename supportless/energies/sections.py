@@ -13,8 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+
+from ..base.graph import edge_components
 
 __all__ = ["LayerSections", "central_moments", "group_by", "layer_sections", "mesh_edges", "outline_around",
            "plane_frame", "section_moments"]
@@ -180,8 +180,7 @@ def layer_sections(vertices: np.ndarray, faces: np.ndarray, planes: np.ndarray) 
     n1, n2 = np.where(flip, n2, n1), np.where(flip, n1, n2)
 
     # outlines (loops) and their moments about each layer's own origin
-    graph = sp.coo_matrix((np.ones(len(n1)), (n1, n2)), shape=(N, N))
-    n_loops, loop_of = connected_components(graph, directed=False)
+    n_loops, loop_of = edge_components(N, n1, n2)
     loop_layer = np.zeros(n_loops, np.int64)
     loop_layer[loop_of] = node_layer
     origin = np.zeros((L, 2))
@@ -244,8 +243,7 @@ def layer_sections(vertices: np.ndarray, faces: np.ndarray, planes: np.ndarray) 
     cols.append(vert[edges[flat, 1]])
     r, c = np.concatenate(rows), np.concatenate(cols)
     total = 2 * N + n
-    n_parts, part_of = connected_components(sp.coo_matrix((np.ones(len(r)), (r, c)), shape=(total, total)),
-                                            directed=False)
+    n_parts, part_of = edge_components(total, r, c)
     part_slab = np.full(n_parts, -2, np.int64)
     part_slab[part_of[bottom]] = node_layer
     part_slab[part_of[top]] = node_layer - 1
@@ -314,8 +312,7 @@ def outline_around(V, F, edges, face_edges, origin, basis, faces=None, along=Non
     along = np.cross(basis[2], normal) @ basis[:2].T
     flip = ((xy[n2] - xy[n1]) * along).sum(axis=1) < 0
     n1, n2 = np.where(flip, n2, n1), np.where(flip, n1, n2)
-    n_loops, loop_of = connected_components(sp.coo_matrix((np.ones(len(n1)), (n1, n2)), shape=(len(ce),) * 2),
-                                            directed=False)
+    n_loops, loop_of = edge_components(len(ce), n1, n2)
     seg_loop = loop_of[n1]
     degree = np.bincount(n1, minlength=len(ce)) + np.bincount(n2, minlength=len(ce))
     open_ = np.zeros(n_loops, bool)

@@ -31,9 +31,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
+from ..base.graph import edge_components
 from .materials import DEFAULT_MATERIAL, MATERIALS, Material, effective_strength, mostly_across
 from .sections import LayerSections, group_by, layer_sections, mesh_edges, outline_around, plane_frame
 
@@ -519,9 +518,7 @@ def _hangs_free(V, F, edges, faces, origin, normal, held_below) -> bool:
     through ``origin`` square to ``normal``) stays clear of the held part (``z < held_below``)."""
     beyond = (V - origin) @ normal > 0
     inner = beyond[edges[:, 0]] & beyond[edges[:, 1]]
-    n = len(V)
-    graph = sp.coo_matrix((np.ones(int(inner.sum())), (edges[inner, 0], edges[inner, 1])), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
+    _, label = edge_components(len(V), edges[inner, 0], edges[inner, 1])
     start = np.unique(F[faces].ravel())
     start = start[beyond[start]]
     reached = np.isin(label, np.unique(label[start]))

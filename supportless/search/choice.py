@@ -35,7 +35,7 @@ from ..rig.rig import Rig
 from .candidates import CANDIDATE_TOLERANCE, DISTINCT_DEGREES, distinct_candidates, pose_distance_deg
 from .objective import POSED_VERTICES
 from .result import PoseResult, measured_at, written_verdict
-from .sturdiness import pose_strength
+from .sturdiness import pose_strength, pose_strengths
 
 __all__ = ["CHECKS_PER_KIND", "KINDS", "PER_KIND", "PREDICTION_TOLERANCE", "REST_STRENGTH_TOLERANCE", "Candidate", "Choice", "candidate_answers", "choose", "pool_of", "print_distance_deg",
            "choose_by_model", "strong_enough"]
@@ -364,6 +364,14 @@ def strong_enough(rig: Rig, candidates: list[Candidate], settings, per_turn: int
         return candidates, None
     material = MATERIALS[settings.material]
     height = float(settings.print_height_mm)
+    lazy = [c for c in candidates if c.kind == "turn"] if per_turn is not None else []
+    wanted = {id(c) for c in candidates if all(c is not t for t in lazy)}
+    # the rest pose and the answers weighed whatever the others weigh (of the turns, the first and the one with the
+    # least predicted support): analysed on two cores at once
+    surely = wanted | ({id(lazy[0]), id(min(lazy, key=lambda c: c.predicted_mm))} if lazy and per_turn else set())
+    pose_strengths(rig, [(rig.rest_angles(), np.eye(3))] + [(c.result.angles, c.result.rotation) for c in candidates
+                                                             if id(c) in surely and c.same_as is None
+                                                             and c.safety_factor is None], height, material)
     rest = pose_strength(rig, rig.rest_angles(), np.eye(3), height, material)
     bound = min(rest.safety_factor * (1.0 - REST_STRENGTH_TOLERANCE), floor) * (1.0 - 1e-9)
 
@@ -378,8 +386,6 @@ def strong_enough(rig: Rig, candidates: list[Candidate], settings, per_turn: int
                 c.breaks_at_n = s.weakest.breaks_at_n if s.weakest is not None else float("inf")
         return c.safety_factor >= bound
 
-    lazy = [c for c in candidates if c.kind == "turn"] if per_turn is not None else []
-    wanted = {id(c) for c in candidates if all(c is not t for t in lazy)}
     for c in candidates:
         if id(c) in wanted:
             weigh(c)

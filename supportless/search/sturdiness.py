@@ -10,12 +10,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.geometry import print_pose
+from ..base.isolated import NativeFailure, run_beside
 from ..energies.materials import Material
 from ..energies.strength import HANDLING_LOAD_N, Strength, analyse_strength
 from ..files.printframe import rotation_to_z
 from ..rig.rig import Rig
 
-__all__ = ["face_bones", "pose_strength", "printed_body"]
+__all__ = ["face_bones", "pose_strength", "pose_strengths", "printed_body"]
 
 
 def face_bones(rig: Rig) -> np.ndarray:
@@ -77,16 +78,67 @@ def pose_strength(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm:
     """
     if rig.dim != 3:
         return None
-    angles = np.asarray(angles, np.float64)
-    rotation = np.asarray(rotation, np.float64)
-    key = (angles.tobytes(), rotation.tobytes(), float(height_mm), material, float(load_n), float(layer_mm))
+    key = _key(angles, rotation, height_mm, material, load_n, layer_mm)
     cache = _strength_cache(rig)
     if key not in cache:
-        if len(cache) >= STRENGTH_CACHE_SIZE:
-            cache.pop(next(iter(cache)))
         V, J = printed_body(rig, angles, rotation, height_mm)
-        cache[key] = analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n, layer_mm)
+        _remember(cache, key, analyse_strength(V, rig.faces, J, rig.bones, face_bones(rig), material, load_n,
+                                               layer_mm))
     return cache[key]
+
+
+def pose_strengths(rig: Rig, poses: list, height_mm: float, material: Material | None = None,
+                   load_n: float = HANDLING_LOAD_N, layer_mm: float = 0.2) -> list:
+    """:func:`pose_strength` of several poses, the analyses not yet made shared between two processes: every other
+    one in a forked child (:func:`~supportless.base.isolated.run_beside`; here, should the child fail), the others
+    here meanwhile. The analysis is numpy's small steps on one core: two poses take the time of one.
+
+    Parameters
+    ----------
+    rig : Rig
+    poses : list of ((m, 3) float64, (3, 3) float64)
+        Angles and print rotation of each pose.
+    height_mm, material, load_n, layer_mm
+        As :func:`pose_strength`.
+
+    Returns
+    -------
+    strengths : list of Strength or None
+    """
+    cache = _strength_cache(rig) if rig.dim == 3 else {}
+    keys = [_key(a, q, height_mm, material, load_n, layer_mm) for a, q in poses]
+    todo = [i for i, key in enumerate(keys) if key not in cache and keys.index(key) == i]
+    if len(todo) >= 2:
+        bodies = [printed_body(rig, *poses[i], height_mm) for i in todo]
+        args = (rig.faces, rig.bones, face_bones(rig), material, load_n, layer_mm)
+        try:
+            theirs, mine = run_beside(_analyses, (bodies[1::2], *args), _analyses, (bodies[::2], *args),
+                                      what="the strength analysis")
+        except NativeFailure:
+            theirs, mine = _analyses(bodies[1::2], *args), None
+        for j, strength in zip(todo[1::2], theirs):
+            _remember(cache, keys[j], strength)
+        for j, strength in zip(todo[::2], mine or []):
+            _remember(cache, keys[j], strength)
+    return [pose_strength(rig, a, q, height_mm, material, load_n, layer_mm) for a, q in poses]
+
+
+def _analyses(bodies, faces, bones, labels, material, load_n, layer_mm) -> list:
+    """(one Strength per ``(vertices, joints)`` of ``bodies``, as printed)."""
+    return [analyse_strength(V, faces, J, bones, labels, material, load_n, layer_mm) for V, J in bodies]
+
+
+def _key(angles, rotation, height_mm, material, load_n, layer_mm) -> tuple:
+    """A pose's analysis in the rig's cache, by its bytes and the analysis's settings."""
+    return (np.asarray(angles, np.float64).tobytes(), np.asarray(rotation, np.float64).tobytes(), float(height_mm),
+            material, float(load_n), float(layer_mm))
+
+
+def _remember(cache: dict, key: tuple, strength: Strength) -> None:
+    """Keep ``strength`` under ``key``, the oldest analysis dropped past :data:`STRENGTH_CACHE_SIZE`."""
+    if key not in cache and len(cache) >= STRENGTH_CACHE_SIZE:
+        cache.pop(next(iter(cache)))
+    cache[key] = strength
 
 
 #: Analyses kept per rig (:func:`pose_strength`): the choice's answers, the rest pose, the report's and the

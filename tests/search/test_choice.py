@@ -144,6 +144,7 @@ def test_the_choice_refuses_answers_weaker_than_both_the_rest_pose_and_the_floor
         return SimpleNamespace(safety_factor=factor, weakest=SimpleNamespace(breaks_at_n=2.0 * factor))
 
     monkeypatch.setattr(choice_mod, "pose_strength", strength)
+    monkeypatch.setattr(choice_mod, "pose_strengths", lambda *_args: None)  # the analyses on two cores: none here
     rig = SimpleNamespace(dim=3, rest_angles=lambda: np.full((1, 3), 0.5))  # the rest pose's factor: 0.5
     settings = sl.SearchSettings().replace(min_safety=1.0)
     weak, under_floor, strong = answer(0.2, 10.0), answer(0.6, 50.0), answer(3.0, 80.0)
