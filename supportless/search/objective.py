@@ -591,8 +591,9 @@ class Objective:
             kept[todo] += self.w_arap * (arap[todo] / self.volume)
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
-            violation[todo] = (excess[todo] + self.posed_violation(transforms[todo], V[todo])
-                               + self.footprint_shortfall(V[todo], None if rotations is None else rotations[todo]))
+            Vt = V if len(todo) == len(V) else V[todo]  # (a copy of every pose's surface costs more than the rule)
+            violation[todo] = (excess[todo] + self.posed_violation(transforms[todo], Vt)
+                               + self.footprint_shortfall(Vt, None if rotations is None else rotations[todo]))
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
                        "intersection": 0.0, "violation": violation[todo]}
             kept[todo] = self.combine(self.normalise(partial))
