@@ -372,7 +372,8 @@ class Objective:
         turned = ~np.all(np.isclose(R, np.eye(self.rig.dim)), axis=(-2, -1))  # upright is the model as it stands
         if np.any(turned):  # V @ R.T measured along up is V measured along R.T @ up
             along = np.einsum("pij,i->pj", R[turned], np.asarray(self.rig.up, np.float64))
-            area = footprint_area(V[turned], self.rig.faces, along, self.print_height_mm / self.height)
+            area = footprint_area(V if turned.all() else V[turned], self.rig.faces, along,
+                                  self.print_height_mm / self.height)
             shortfall[turned] = np.maximum(0.0, 1.0 - area / self.footprint_mm2)
         return shortfall
 
@@ -483,18 +484,14 @@ class Objective:
     def bounded(self, angles: np.ndarray, bound: np.ndarray, rotations: np.ndarray | None = None) -> np.ndarray:
         """Objective of a batch, exact only where it can beat ``bound``.
 
-        What the search minimises: posed with :attr:`search_lbs` (the other
-        methods pose with the rig's own weights). No term is ever negative,
-        so a pose whose cheaper terms alone reach its bound cannot beat it:
-        the terms are computed in order of cost (prior and overhang, then
-        distortion, then the standing rule, then the expensive
-        self-intersection), each only for the poses the ones before leave
-        below their bound; a pose past a joint limit is not
-        measured at all when its bound keeps the rules (below
-        :data:`INFEASIBLE`). The swarm passes each particle's best value as
-        its bound. A batch larger than :data:`POSE_CHUNK` is measured
-        in chunks of that size (the same values; memory no longer grows with
-        the swarm).
+        What the search minimises: posed with :attr:`search_lbs` (the other methods pose with the rig's own
+        weights). No term is ever negative, so a pose whose cheaper terms alone reach its bound cannot beat it:
+        the terms are computed in order of cost (prior and overhang, then distortion, then the standing rule,
+        then the expensive self-intersection), each only for the poses the ones before leave below their bound;
+        a pose past a joint limit is not measured at all when its bound keeps the rules (below
+        :data:`INFEASIBLE`). The swarm passes each particle's best value as its bound. A batch larger than
+        :data:`POSE_CHUNK` is measured in chunks of that size (the same values; memory no longer grows with the
+        swarm).
 
         Parameters
         ----------
