@@ -19,6 +19,7 @@ In 2D the support polygon is an interval on the plate line.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 from ..base.geometry import plane_basis
 
@@ -177,10 +178,27 @@ def new_contact_depth(vertices: np.ndarray, up: np.ndarray, clear: np.ndarray, l
         ``max(0, level - lowest clear vertex)``: 0 when nothing new touches.
     """
     V = np.asarray(vertices, np.float64)
+    index = np.flatnonzero(clear)
+    if V.ndim == 3 and V.shape[-1] == 3 and len(index):  # a batch: one compiled pass, no (P, n) heights
+        return np.maximum(0.0, level - _lowest(V, index, np.ascontiguousarray(up, np.float64)))
     # heights first, then the clear ones: a mask on (P, n, d) would copy every clear vertex
-    h = np.take(V @ np.asarray(up, np.float64), np.flatnonzero(clear), axis=-1)
+    h = np.take(V @ np.asarray(up, np.float64), index, axis=-1)
     if h.shape[-1] == 0:
         out = np.zeros(h.shape[:-1])
     else:
         out = np.maximum(0.0, level - h.min(axis=-1))
     return float(out) if np.ndim(out) == 0 else out
+
+
+@njit(cache=True, parallel=True)
+def _lowest(V, index, up):  # pragma: no cover - compiled
+    # (P,) float64: the least height along up of the vertices ``index`` of each pose (the same products and sums
+    # as ``V @ up``: x u0 + y u1 + z u2)
+    out = np.empty(V.shape[0])
+    for p in prange(V.shape[0]):
+        low = np.inf
+        for k in range(index.shape[0]):
+            i = index[k]
+            low = min(low, V[p, i, 0] * up[0] + V[p, i, 1] * up[1] + V[p, i, 2] * up[2])
+        out[p] = low
+    return out

@@ -54,6 +54,24 @@ def test_new_contact_depth():
     np.testing.assert_allclose(new_contact_depth(V, np.array([0, 0, 1.0]), clear, 0.1), [0.0, 0.6])
 
 
+def test_new_contact_depth_of_a_batch_is_that_of_each_pose(branch_rig):
+    """The batch's compiled pass against the heights of each pose alone (numpy's ``V @ up``), along an axis (the same
+    bits) and a tilted direction; a pose whose clear vertices stay up is 0, one brought down by its depth."""
+    rig = branch_rig
+    rng = np.random.default_rng(3)
+    V = rig.pose(rng.normal(scale=0.6, size=(12, rig.bone_count, 3)))
+    clear = rng.random(len(rig.vertices)) > 0.3
+    for up in (np.array([0.0, 1.0, 0.0]), np.array([0.3, 0.9, -0.2]) / np.linalg.norm([0.3, 0.9, -0.2])):
+        heights = V @ up
+        level = float(np.median(heights[:, clear].min(axis=1)))  # half the poses come down past it
+        batch = new_contact_depth(V, up, clear, level)
+        alone = np.array([new_contact_depth(v, up, clear, level) for v in V])
+        np.testing.assert_allclose(batch, alone, rtol=0, atol=1e-12 if up[0] else 0.0)
+        np.testing.assert_allclose(batch, np.maximum(0.0, level - heights[:, clear].min(axis=1)), rtol=0, atol=1e-12)
+        assert 0 < np.count_nonzero(batch) < len(V)
+    assert np.all(new_contact_depth(V, up, np.zeros(len(rig.vertices), bool), 0.0) == 0)  # nothing clear
+
+
 def test_the_rest_pose_stands(tpose_rig):
     standing = Standing(tpose_rig)
     rest = standing.measures(tpose_rig.transforms(tpose_rig.rest_angles()), tpose_rig.vertices)
