@@ -14,9 +14,10 @@ measurement is not.
 
 The figures were recorded at commit de15cad (before the answer's stages became
 :mod:`supportless.search.answer`; the same refactor left 20fa53c's figures identical too, before that
-commit's cuts to the search changed them in their last digits; the small search's ``term_history`` was
-recorded again when the progress began showing the search's own measure of its best, posed with its pruned
-weights: nothing else moved) with ``../shared`` beside the project, by::
+commit's cuts to the search changed them in their last digits; both searches' figures were recorded again at
+c910bc1, where only the ``term_history`` (the progress shows the search's own measure of its best, posed
+with its pruned weights) and a mirrored figure's ``symmetry`` and summary row (one mirrored search) moved)
+with ``../shared`` beside the project, by::
 
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record            # the test's small search
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record defaults   # the command's own defaults
