@@ -189,8 +189,8 @@ def mirrored_answer(rig: Rig, settings: SearchSettings, request: Request) -> Pos
 
     A second, free search from the mirrored answer, kept only when it predicted 10 % less support, was kept on none
     of the 17 mirrored figures of the zoo and the shared glTF characters: it predicted the mirrored answer's support
-    on 13 and at most 3.7 % less on the others (benchmarks/RESULTS.md, "One search for a mirrored figure"). It is no
-    longer run. ``symmetry`` says so: ``mode`` ("auto"), ``kept`` ("mirrored") and ``mirrored_mm``, the answer's
+    on 12, more on 3 and at most 3.7 % less on 2 (benchmarks/RESULTS.md, "One search for a mirrored figure"). It is
+    no longer run. ``symmetry`` says so: ``mode`` ("auto"), ``kept`` ("mirrored") and ``mirrored_mm``, the answer's
     support filament as the slicer model predicts it (:func:`predicted_mm`).
     """
     answer = one_answer(rig, settings.replace(symmetric=True), request)
