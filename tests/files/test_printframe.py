@@ -226,8 +226,8 @@ def test_the_progress_total_never_changes(tpose_rig):
     assert len(totals) == 1
     assert [it for it, _, _ in seen] == list(range(1, len(seen) + 1))
     assert seen[-1][0] == totals.pop()
-    # the tpose has a mirror plane: the mirrored search, then the free one, counted as one
-    assert seen[0][2] == "mirrored: pose" and seen[-1][2] == "free: pose and turn"
+    # the tpose has a mirror plane: one mirrored search, its two phases counted as one
+    assert seen[0][2] == "pose" and seen[-1][2] == "pose and turn" and len(seen) == 2 * 3
 
 
 @pytest.mark.slow
