@@ -167,7 +167,7 @@ class _PoseSearch:
                              for j, i in enumerate(batch["index"])})
             return values
 
-        def terms_of(x):  # the swarm's new best was measured in full as it was found; else (a bound of 0) measured
+        def terms_of(x):  # a new best was measured in full in the batch that found it; else it is measured here
             known = measured.get(x.tobytes())
             return known if known is not None else \
                 {key: float(v[0]) for key, v in objective.terms(to_angles(x[None]), to_rotation(x)[None]

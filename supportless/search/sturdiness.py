@@ -90,8 +90,8 @@ def pose_strength(rig: Rig, angles: np.ndarray, rotation: np.ndarray, height_mm:
 def pose_strengths(rig: Rig, poses: list, height_mm: float, material: Material | None = None,
                    load_n: float = HANDLING_LOAD_N, layer_mm: float = 0.2) -> list:
     """:func:`pose_strength` of several poses, the analyses not yet made shared between two processes: every other
-    one in a forked child (:func:`~supportless.base.isolated.run_beside`; here, should the child fail), the others
-    here meanwhile. The analysis is numpy's small steps on one core: two poses take the time of one.
+    one in a forked child (:func:`~supportless.base.isolated.run_beside`), the others here meanwhile; should the
+    child fail, every one is made here. The analysis is numpy's small steps on one core: two poses take the time of one.
 
     Parameters
     ----------
@@ -105,21 +105,25 @@ def pose_strengths(rig: Rig, poses: list, height_mm: float, material: Material |
     -------
     strengths : list of Strength or None
     """
-    cache = _strength_cache(rig) if rig.dim == 3 else {}
-    keys = [_key(a, q, height_mm, material, load_n, layer_mm) for a, q in poses]
-    todo = [i for i, key in enumerate(keys) if key not in cache and keys.index(key) == i]
+    if rig.dim != 3:
+        return [None] * len(poses)
+    cache = _strength_cache(rig)
+    todo: dict = {}  # each analysis not yet made, once: key -> the first pose asking for it
+    for i, (a, q) in enumerate(poses):
+        key = _key(a, q, height_mm, material, load_n, layer_mm)
+        if key not in cache:
+            todo.setdefault(key, i)
     if len(todo) >= 2:
-        bodies = [printed_body(rig, *poses[i], height_mm) for i in todo]
+        keys = list(todo)
+        bodies = [printed_body(rig, *poses[i], height_mm) for i in todo.values()]
         args = (rig.faces, rig.bones, face_bones(rig), material, load_n, layer_mm)
         try:
             theirs, mine = run_beside(_analyses, (bodies[1::2], *args), _analyses, (bodies[::2], *args),
                                       what="the strength analysis")
-        except NativeFailure:
-            theirs, mine = _analyses(bodies[1::2], *args), None
-        for j, strength in zip(todo[1::2], theirs):
-            _remember(cache, keys[j], strength)
-        for j, strength in zip(todo[::2], mine or []):
-            _remember(cache, keys[j], strength)
+        except NativeFailure:  # the analyses not made are made here, one by one, below
+            theirs, mine = [], []
+        for key, strength in [*zip(keys[1::2], theirs), *zip(keys[::2], mine)]:
+            _remember(cache, key, strength)
     return [pose_strength(rig, a, q, height_mm, material, load_n, layer_mm) for a, q in poses]
 
 
