@@ -144,41 +144,64 @@ def _read_plain_obj(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
     import warnings
 
     try:
-        lines = path.read_bytes().replace(b"\r", b"").replace(b"\t", b" ").split(b"\n")
+        text = path.read_bytes().replace(b"\r", b"").replace(b"\t", b" ") + b"\n"
     except OSError:
         return None
-    vertex_lines, face_lines = [], []
-    for line in lines:
-        head = line[:2]
-        if head == b"v ":
-            vertex_lines.append(line[2:])
-        elif head == b"f ":
-            face_lines.append(line[2:])
-        elif line.strip() and not line.lstrip().startswith(_OBJ_SKIPPED):
+    chars = np.frombuffer(text, np.uint8)
+    ends = np.flatnonzero(chars == ord("\n"))  # each line's newline
+    starts = np.r_[0, ends[:-1] + 1]
+    first, second = np.r_[chars, 0][starts], np.r_[chars, 0, 0][starts + 1]
+    vertex = (first == ord("v")) & (second == ord(" "))
+    face = (first == ord("f")) & (second == ord(" "))
+    for i in np.flatnonzero(~(vertex | face)):  # comments, names, groups, materials, blank lines
+        line = text[starts[i]:ends[i]]
+        if line.strip() and not line.lstrip().startswith(_OBJ_SKIPPED):
             return None
-
-    def three_words(rows):  # every row three words (a quick look; rows it cannot settle are split)
-        return all(len(r.split()) == 3 for r in rows if r.count(b" ") != 2 or b"  " in r or r.startswith(b" ")
-                   or r.endswith(b" "))
-
-    if not vertex_lines or not face_lines or not three_words(vertex_lines) or not three_words(face_lines):
+    if not vertex.any() or not face.any():
         return None
-    faces_text = b" ".join(face_lines)
-    if b"/" in faces_text:
-        faces_text = re.sub(rb"/[^ ]*", b"", faces_text)
+    vertex_text, face_text = _rows(chars, starts[vertex], ends[vertex]), _rows(chars, starts[face], ends[face])
+    if vertex_text is None or face_text is None:
+        return None
+    if b"/" in face_text:
+        face_text = re.sub(rb"/[^ \n]*", b"", face_text)
     with warnings.catch_warnings():  # a word that is no number: the old numpy warns and stops, the new raises
         warnings.simplefilter("ignore")
         try:
-            V = np.fromstring(b" ".join(vertex_lines), sep=" ")
-            F = np.fromstring(faces_text, dtype=np.int64, sep=" ")
+            V = np.fromstring(vertex_text, sep=" ")
+            F = np.fromstring(face_text, dtype=np.int64, sep=" ")
         except ValueError:
             return None
-    if V.size != 3 * len(vertex_lines) or F.size != 3 * len(face_lines):
+    if V.size != 3 * vertex.sum() or F.size != 3 * face.sum():
         return None
     V, F = V.reshape(-1, 3), F.reshape(-1, 3) - 1
     if F.min() < 0 or F.max() >= len(V) or not np.isfinite(V).all():
         return None
     return V, F
+
+
+def _rows(chars: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> bytes | None:
+    """The words of the lines ``chars[start + 2 : end]`` (each after its two-character kind), a line per row, or
+    None when a line does not hold exactly three words (separated by spaces).
+
+    Parameters
+    ----------
+    chars : (c,) uint8
+        The file's characters; ``chars[end]`` is each line's newline.
+    starts, ends : (r,) int64
+    """
+    inside = np.zeros(len(chars) + 1, np.int8)
+    inside[starts + 2] += 1
+    inside[ends + 1] -= 1  # each line's newline kept: it ends the row
+    kept = chars[np.cumsum(inside[:-1], dtype=np.int8).astype(bool)]
+    blank = (kept == ord(" ")) | (kept == ord("\n"))
+    word = ~blank
+    word[1:] &= blank[:-1]  # a word starts after a blank
+    words, row_ends = np.flatnonzero(word), np.flatnonzero(kept == ord("\n"))
+    if len(words) != 3 * len(row_ends):
+        return None
+    if np.any(words[0::3] < np.r_[0, row_ends[:-1]]) or np.any(words[2::3] > row_ends):
+        return None  # row k holds words 3k to 3k + 2, so each row three
+    return kept.tobytes()
 
 
 def _check_obj_vertex_lines(path: Path) -> None:

@@ -605,6 +605,28 @@ f 1/1/1  4/4/1 3/3/1
 """
 
 
+def test_obj_rows_are_kept_when_every_one_holds_three_words_as_split_counts_them():
+    rng = np.random.default_rng(0)
+    words, blanks = [b"1", b"-2.5e3", b"7/7/1"], [b"", b" ", b"  "]
+
+    def row():  # usually three words, with any spacing around them
+        count = rng.choice([0, 2, 3, 3, 3, 3, 4])
+        gaps = [blanks[i] for i in rng.integers(0, 3, count + 1)]
+        gaps[1:-1] = [gap or b" " for gap in gaps[1:-1]]
+        return gaps[0] + b"".join(words[rng.integers(3)] + gap for gap in gaps[1:]) if count else gaps[0]
+
+    verdicts = []
+    for _ in range(300):
+        rows = [row() for _ in range(rng.integers(1, 4))]
+        verdicts.append(all(len(r.split()) == 3 for r in rows))
+        text = b"".join(b"v " + r + b"\n" for r in rows)
+        chars = np.frombuffer(text, np.uint8)
+        ends = np.flatnonzero(chars == ord("\n"))
+        kept = io._rows(chars, np.r_[0, ends[:-1] + 1], ends)
+        assert kept == (b"".join(r + b"\n" for r in rows) if verdicts[-1] else None), rows
+    assert 50 < sum(verdicts) < 250  # both verdicts are tried
+
+
 @pytest.mark.parametrize("text, plain", [
     (OBJ_PLAIN, True),
     (OBJ_PLAIN.replace("/", "//", 1).replace("//", "/", 1), True),
