@@ -50,8 +50,9 @@ def edge_counts(faces: np.ndarray) -> np.ndarray:
 
 def manifold_check(vertices: np.ndarray, faces: np.ndarray, dtype=np.float32) -> dict:
     """What a file reader finds of a surface: ``open_edges`` (in one triangle), ``shared_edges`` (in three or more),
-    ``closed`` (every edge in exactly two triangles), with corners welded at ``dtype``."""
-    counts = edge_counts(welded(vertices, faces, dtype))
+    ``closed`` (every edge in exactly two triangles), with corners welded at ``dtype`` (None: ``faces`` as they
+    are, their corners welded already)."""
+    counts = edge_counts(faces if dtype is None else welded(vertices, faces, dtype))
     open_, shared = int(np.sum(counts == 1)), int(np.sum(counts > 2))
     return {"open_edges": open_, "shared_edges": shared, "closed": open_ == 0 and shared == 0}
 

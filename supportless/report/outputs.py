@@ -80,7 +80,7 @@ def write_posed(path: str | os.PathLike, rig, angles: np.ndarray, standing: np.n
 def _as_read(path) -> str:
     """``""`` when the written file reads back closed (every edge in two triangles), else a warning clause."""
     V, F = read_mesh(path)
-    found = manifold_check(V, F, np.float64)  # read_mesh welds the file's corners as they are stored
+    found = manifold_check(V, F, None)  # read_mesh welded the file's corners as they are stored
     if found["closed"]:
         return ""
     return (f"; warning: read back, {found['open_edges']} edges are in one triangle and {found['shared_edges']} in "
