@@ -95,6 +95,16 @@ def test_past_the_threshold_the_fast_reduction_comes_first_and_a_bad_one_is_pass
     assert len(intersecting_faces(U, G)) == 0
     assert len(simplify.folded_pairs(U, G)) == 0
     assert signed_volume(U, G) == pytest.approx(4 / 3 * np.pi * 1000, rel=0.2)
+    # the grid's surface is collapsed without refusing collapses, and again refusing them when that is not clean
+    import igl
+
+    blocks, decimate = [], igl.decimate
+    monkeypatch.setattr(igl, "decimate", lambda *a: blocks.append(a[3]) or decimate(*a))
+    simplify.simplify_surface(V, F, 500)
+    monkeypatch.setattr(simplify, "_clean", lambda U, G: False)
+    U1, G1 = simplify.simplify_surface(V, F, 500)
+    assert blocks == [False, False, True] and len(intersecting_faces(U1, G1)) == 0
+    monkeypatch.setattr(igl, "decimate", decimate)
     # the slow way: asked for, or when the quick reduction is not clean (None)
     seen.clear()
     U2, G2 = simplify.simplify_surface(V, F, 500, fast_first=False)
