@@ -14,6 +14,7 @@ from collections import OrderedDict
 
 import numpy as np
 
+from ..base.crossing_filter import possibly_crossing_faces
 from ..base.geometry import surface_digest
 
 __all__ = ["PART_FACES", "face_parts", "intersecting_faces", "intersecting_faces_since", "intersecting_face_pairs",
@@ -152,7 +153,7 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
         raise ValueError(f"vertices must be (n, 3) for the exact test, not {V.shape}")
     F = np.ascontiguousarray(faces, np.int64)
     if len(F) <= PART_FACES:
-        return _cgal(V, F, first_only)
+        return _filtered(V, F, first_only)
     key = surface_digest(V, F)
     known = _answers.setdefault(key, {})  # "all": every pair, "first": the first-only answer
     _answers.move_to_end(key)
@@ -162,9 +163,22 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
         return known["all"][:1] if first_only else known["all"]
     if "first" in known and (first_only or len(known["first"]) == 0):
         return known["first"]
-    pairs = _detect_in_parts(V, F, first_only)
+    pairs = _filtered(V, F, first_only)
     known["first" if first_only else "all"] = pairs
     return pairs
+
+
+def _filtered(V: np.ndarray, F: np.ndarray, first_only: bool) -> np.ndarray:
+    """CGAL's pairs among the triangles that floating-point tests cannot prove apart from their neighbours
+    (:func:`~supportless.base.crossing_filter.possibly_crossing_faces`): every intersecting pair of the surface,
+    as face indices of the whole; none asked of CGAL when every triangle is proven apart."""
+    maybe = np.flatnonzero(possibly_crossing_faces(V, F))
+    if len(maybe) == 0:
+        return np.zeros((0, 2), np.int64)
+    used, local = np.unique(F[maybe], return_inverse=True)  # shared corners stay shared
+    Vs, Fs = np.ascontiguousarray(V[used]), local.reshape(-1, 3).astype(np.int64)
+    pairs = _cgal(Vs, Fs, first_only) if len(Fs) <= PART_FACES else _detect_in_parts(Vs, Fs, first_only)
+    return maybe[pairs]
 
 
 def _cgal(V: np.ndarray, F: np.ndarray, first_only: bool) -> np.ndarray:
