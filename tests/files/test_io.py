@@ -8,6 +8,7 @@ import pytest
 import supportless as sl
 from supportless.base.geometry import parse_up, signed_volume
 from supportless.files import meshes as io
+from supportless.files.objtext import rows_of_three
 
 FORMATS = ["stl", "obj", "ply", "off", "3mf", "glb"]
 
@@ -622,7 +623,7 @@ def test_obj_rows_are_kept_when_every_one_holds_three_words_as_split_counts_them
         text = b"".join(b"v " + r + b"\n" for r in rows)
         chars = np.frombuffer(text, np.uint8)
         ends = np.flatnonzero(chars == ord("\n"))
-        kept = io._rows(chars, np.r_[0, ends[:-1] + 1], ends)
+        kept = rows_of_three(chars, np.r_[0, ends[:-1] + 1], ends)
         assert kept == (b"".join(r + b"\n" for r in rows) if verdicts[-1] else None), rows
     assert 50 < sum(verdicts) < 250  # both verdicts are tried
 
