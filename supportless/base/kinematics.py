@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .skinning import WeightBlocks, skin_blocks, weight_blocks
+from .skinning import WeightBlocks, skin_blocks, skin_dense, weight_blocks
 
 
 def bone_parents(bones: np.ndarray) -> np.ndarray:
@@ -614,10 +614,9 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     M : (n, m*(d+1)) float64 array, scipy.sparse CSR matrix or WeightBlocks
-        From :func:`lbs_matrix` or :func:`lbs_operator`. A sparse one is
-        applied by a compiled loop over its (vertex, bone) blocks
-        (:func:`bone_blocks`), parallel over poses; weight blocks the same way
-        (:func:`~supportless.base.skinning.skin_blocks`).
+        From :func:`lbs_matrix` or :func:`lbs_operator`. Each kind is applied by a compiled loop, parallel over
+        poses: a dense 3D one by :func:`~supportless.base.skinning.skin_dense`, a sparse one over its (vertex,
+        bone) blocks (:func:`bone_blocks`), weight blocks by :func:`~supportless.base.skinning.skin_blocks`.
     transforms : (P, m, d, d+1) or (m, d, d+1) float64
 
     Returns
@@ -628,7 +627,9 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
     if isinstance(M, WeightBlocks):
         return skin_blocks(M, T[None])[0] if T.ndim == 2 else skin_blocks(M, T)
     if not hasattr(M, "indptr"):
-        return np.matmul(M, T)
+        if T.shape[-1] != 3 or M.ndim != 2:
+            return np.matmul(M, T)
+        return skin_dense(M, T[None])[0] if T.ndim == 2 else skin_dense(M, T)
     single = T.ndim == 2
     T = T[None] if single else T
     d = T.shape[2]

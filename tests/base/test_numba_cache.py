@@ -59,3 +59,20 @@ def test_a_users_numba_cache_dir_is_left_alone(tmp_path):
     code = "import os, supportless; print(os.environ['NUMBA_CACHE_DIR'])"
     run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0 and run.stdout.strip() == str(tmp_path / "mine"), run.stderr
+
+
+def test_openmp_runs_the_kernels_unless_the_user_chose_a_threading_layer():
+    """TBB's launches grow slower in a long-lived process (the module's doc); OpenMP is tried first."""
+    import ctypes.util
+
+    if ctypes.util.find_library("gomp") is None:
+        pytest.skip("no OpenMP runtime (libgomp) here: numba cannot use OpenMP (apt-get install libgomp1)")
+    code = ("import supportless, numba, numpy as np; from supportless.base.graph import edge_components; "
+            "edge_components(3, np.array([0]), np.array([1])); from supportless.base.skinning import skin_dense; "
+            "skin_dense(np.ones((4, 4)), np.ones((2, 4, 3))); print(numba.threading_layer())")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_THREADING_LAYER")}
+    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0 and run.stdout.split()[-1] == "omp", run.stderr
+    run = subprocess.run([sys.executable, "-c", code], env=dict(env, NUMBA_THREADING_LAYER="workqueue"),
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0 and run.stdout.split()[-1] == "workqueue", run.stderr
