@@ -163,7 +163,7 @@ def _detect(vertices, faces, first_only: bool) -> np.ndarray:
         return known["all"][:1] if first_only else known["all"]
     if "first" in known and (first_only or len(known["first"]) == 0):
         return known["first"]
-    pairs = _filtered(V, F, first_only)
+    pairs = _normalised(_filtered(V, F, first_only))
     known["first" if first_only else "all"] = pairs
     return pairs
 

@@ -82,6 +82,10 @@ def test_the_check_in_parts_finds_the_pairs_of_the_whole_surface(monkeypatch, se
     assert len(whole) == len(reported) > 10  # each pair once: the count is the same
     monkeypatch.setattr(cgal, "PART_FACES", 400)  # 2560 triangles: 7 slabs
     assert len(cgal.face_parts(V, F, 7)) == 7
+    np.testing.assert_array_equal(intersecting_faces(V, F), whole)  # (the triangles the filter leaves)
+    assert self_intersects(V, F) is True
+    monkeypatch.setattr(cgal, "_answers", cgal.OrderedDict())
+    monkeypatch.setattr(cgal, "possibly_crossing_faces", lambda V, F: np.ones(len(F), bool))  # every slab
     np.testing.assert_array_equal(intersecting_faces(V, F), whole)
     assert self_intersects(V, F) is True
     import trimesh
