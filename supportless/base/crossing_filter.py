@@ -119,7 +119,12 @@ def _sign(ux, uy, uz, vx, vy, vz, wx, wy, wz):
     uv, vu = ux * vy, vx * uy
     det = uz * (vw - wv) + vz * (wu - uw) + wz * (uv - vu)
     permanent = (abs(vw) + abs(wv)) * abs(uz) + (abs(wu) + abs(uw)) * abs(vz) + (abs(uv) + abs(vu)) * abs(wz)
-    bound = ORIENT_BOUND * permanent
+    return _certain(det, ORIENT_BOUND * permanent)
+
+
+@njit(cache=True)
+def _certain(det, bound):
+    """+1 or -1, the sign of ``det`` when it is farther from 0 than ``bound``; else 0."""
     if det > bound:
         return 1
     if -det > bound:
@@ -206,13 +211,7 @@ def _side(V, a, b, c, x, y):
     certain)."""
     left = (V[a, x] - V[c, x]) * (V[b, y] - V[c, y])
     right = (V[a, y] - V[c, y]) * (V[b, x] - V[c, x])
-    det = left - right
-    bound = SIDE_BOUND * (abs(left) + abs(right))
-    if det > bound:
-        return 1
-    if -det > bound:
-        return -1
-    return 0
+    return _certain(left - right, SIDE_BOUND * (abs(left) + abs(right)))
 
 
 @njit(cache=True)
