@@ -41,3 +41,24 @@ def test_a_large_surface_is_skinned_without_its_matrix(monkeypatch):
     assert isinstance(op, WeightBlocks)
     np.testing.assert_allclose(kin.skin(op, T), kin.skin(kin.lbs_matrix(V, W), T), rtol=0, atol=1e-12)
     assert not isinstance(kin.lbs_operator(V[:, :2], W), WeightBlocks)  # a planar rig keeps its matrix
+
+
+def test_dense_skinning_is_the_matrix_product_and_keeps_one_transpose_per_live_matrix():
+    import gc
+
+    from supportless.base import skinning
+
+    rng = np.random.default_rng(3)
+    T = rng.normal(size=(5, 8, 3))
+    first = rng.normal(size=(40, 8))
+    for _ in range(2):  # the second call uses the kept transpose
+        np.testing.assert_allclose(skinning.skin_dense(first, T), np.matmul(first, T), rtol=1e-13, atol=1e-13)
+    assert skinning._TRANSPOSES[id(first)][1].shape == (8, 40)
+    key = id(first)
+    del first
+    gc.collect()
+    assert key not in skinning._TRANSPOSES  # dropped with its matrix
+    for _ in range(3):  # new matrices (perhaps at a freed address) are never given an old transpose
+        M = rng.normal(size=(40, 8))
+        np.testing.assert_allclose(skinning.skin_dense(M, T), np.matmul(M, T), rtol=1e-13, atol=1e-13)
+        del M
