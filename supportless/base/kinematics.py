@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from .chain import chain_transforms3, euler_matrices
 from .skinning import WeightBlocks, skin_blocks, skin_dense, weight_blocks
 
 
@@ -274,20 +275,7 @@ def euler_to_matrix(angles: np.ndarray) -> np.ndarray:
         ``Rx(a0) @ Ry(a1) @ Rz(a2)``.
     """
     a = np.asarray(angles, dtype=np.float64)
-    c, s = np.cos(a), np.sin(a)
-    cx, cy, cz = c[..., 0], c[..., 1], c[..., 2]
-    sx, sy, sz = s[..., 0], s[..., 1], s[..., 2]
-    R = np.empty(a.shape[:-1] + (3, 3))
-    R[..., 0, 0] = cy * cz
-    R[..., 0, 1] = -cy * sz
-    R[..., 0, 2] = sy
-    R[..., 1, 0] = sx * sy * cz + cx * sz
-    R[..., 1, 1] = -sx * sy * sz + cx * cz
-    R[..., 1, 2] = -sx * cy
-    R[..., 2, 0] = -cx * sy * cz + sx * sz
-    R[..., 2, 1] = cx * sy * sz + sx * cz
-    R[..., 2, 2] = cx * cy
-    return R
+    return euler_matrices(np.ascontiguousarray(a.reshape(-1, 3))).reshape(a.shape[:-1] + (3, 3))
 
 
 def matrix_to_euler(R: np.ndarray) -> np.ndarray:
@@ -377,10 +365,14 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
         pivots = tree_pivots if pivots is None else pivots
     if order is None:
         order = topological_order(parents)
-    dQ = euler_to_matrix(angles) if d == 3 else planar_rotation(angles[..., 2])
+    roots = joints[bones[:, 0] if pivots is None else np.asarray(pivots, np.int64)]  # (m, d)
+    if d == 3:  # compiled, the same bits as the loop below
+        out = chain_transforms3(euler_to_matrix(angles), np.ascontiguousarray(roots), np.asarray(parents, np.int64),
+                                np.asarray(order, np.int64))
+        return out[0] if single else out
+    dQ = planar_rotation(angles[..., 2])
     Q = np.empty((P, m, d, d))
     t = np.empty((P, m, d))
-    roots = joints[bones[:, 0] if pivots is None else np.asarray(pivots, np.int64)]  # (m, d)
     for b in order:  # m iterations, each vectorised over poses
         r = roots[b]
         p = parents[b]
