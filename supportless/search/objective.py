@@ -50,13 +50,17 @@ from .standing import Standing
 from .weights import (CHAIN_LIMIT, FOOTPRINT_MM2, HEAD_LIMIT, JOINT_LIMIT, W_ARAP, W_CHAIN, W_CONTACT, W_INTERSECT,
                       W_OVERHANG, W_PRIOR)
 
-__all__ = ["CHAIN_LIMIT", "FOOTPRINT_MM2", "HEAD_LIMIT", "INFEASIBLE", "JOINT_LIMIT", "OVERHANG_MODELS", "Objective",
-           "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT", "W_CHAIN", "W_OVERHANG", "W_PRIOR"]
+__all__ = ["CHAIN_LIMIT", "FOOTPRINT_MM2", "HEAD_LIMIT", "INFEASIBLE", "INTERSECT_MOST", "JOINT_LIMIT", "OVERHANG_MODELS",
+           "Objective", "POSE_CHUNK", "SEARCH_WEIGHT_FLOOR", "W_ARAP", "W_INTERSECT", "W_CHAIN", "W_OVERHANG", "W_PRIOR"]
 
 #: The search measures the self-intersection of the poses that could become the swarm's best this many at a time,
 #: the least costly by the other terms first (:meth:`Objective.bounded_overlap`): after each group, a pose whose
 #: other terms cost more than the least total measured is not measured.
 INTERSECT_CHUNK = 4
+
+#: At most this many of a batch (a swarm gathered where a limb rests on the body, at the allowed contact's few
+#: percent, had every pose of that band measured: half the Xbot's search).
+INTERSECT_MOST = 8
 
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
 #: larger than any pose that keeps them can cost.
@@ -524,12 +528,9 @@ class Objective:
             their sum, without the self-intersection term (a lower bound
             that may be below ``bound``). The search passes the swarm's best
             value: only a pose that could become the swarm's best is
-            measured in full. Those are measured the least costly first,
-            :data:`INTERSECT_CHUNK` at a time; a pose whose other terms
-            reach the least total measured before it is not measured and
-            gets the larger of their sum and ``intersection_bound`` (it
-            cannot become the swarm's best: another pose of the batch costs
-            less).
+            measured in full. Those are measured the least costly first, :data:`INTERSECT_CHUNK` at a time, at
+            most :data:`INTERSECT_MOST`; a pose not measured gets the larger of its other terms' sum and
+            ``intersection_bound``: it is not taken as the swarm's best.
         measured : dict, optional
             Filled with the normalised terms (as :meth:`terms`, posed with the search's weights) of the poses
             measured in full, the self-intersection too: ``"index"`` (r,) int64, their positions in the batch,
@@ -616,10 +617,10 @@ class Objective:
 
     def _intersect_best_first(self, V, todo, kept, overlap, keep) -> np.ndarray:
         """Add the self-intersection cost to ``kept[todo]``, the least partial sums first, :data:`INTERSECT_CHUNK`
-        poses at a time, stopping where the partial sums reach the least total measured: a pose whose other terms
-        already cost that much cannot become the batch's best. Fills ``overlap[keep[...]]``; returns the measured
-        indices into ``kept`` (int64)."""
-        order = todo[np.argsort(kept[todo], kind="stable")]
+        poses at a time, stopping where the partial sums reach the least total measured (a pose whose other terms
+        already cost that much cannot become the batch's best) or after :data:`INTERSECT_MOST` poses. Fills
+        ``overlap[keep[...]]``; returns the measured indices into ``kept`` (int64)."""
+        order = todo[np.argsort(kept[todo], kind="stable")][:INTERSECT_MOST]
         least, done = np.inf, 0
         while done < len(order) and kept[order[done]] < least:
             chunk = order[done:done + INTERSECT_CHUNK]

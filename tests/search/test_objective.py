@@ -241,6 +241,31 @@ def test_the_self_intersection_is_measured_only_where_a_pose_could_become_the_ba
     assert measured == [30]
 
 
+def test_at_most_intersect_most_poses_of_a_batch_are_measured(rig, monkeypatch):
+    from supportless.search import objective as objective_mod
+
+    obj = sl.Objective(rig)
+    obj.__dict__["search_lbs"] = rig.lbs
+    A = random_angles(rig, 30, scale=1.5, seed=11)
+    terms = obj.normalise(obj.raw_terms(A))
+    others = obj.combine(terms | {"intersection": np.zeros(30)})
+    cut = float(np.max(others)) + 1.0  # every pose could become the swarm's best: only the cap stops the measure
+    measured = []
+    intersection = obj._intersection
+    monkeypatch.setattr(obj, "_intersection", lambda V: measured.append(len(V)) or intersection(V))
+    values, _ = obj.bounded_overlap(A, np.full(30, np.inf), intersection_bound=cut)
+    uncapped = sum(measured)
+    assert uncapped <= objective_mod.INTERSECT_MOST
+    monkeypatch.setattr(objective_mod, "INTERSECT_MOST", 2)
+    measured.clear()
+    values, _ = obj.bounded_overlap(A, np.full(30, np.inf), intersection_bound=cut)
+    assert measured == [2]  # one chunk, cut to the cap
+    was = np.zeros(30, bool)
+    was[np.argsort(others, kind="stable")[:sum(measured)]] = True  # the least costly by the other terms
+    np.testing.assert_allclose(values[was], obj.combine(terms)[was], rtol=1e-12)
+    np.testing.assert_allclose(values[~was], np.maximum(others[~was], cut), rtol=1e-12)  # not the swarm's best
+
+
 def test_the_terms_of_the_poses_measured_in_full_are_handed_back_as_terms_gives_them(rig, monkeypatch):
     """``measured``: exactly the poses whose self-intersection was measured, each with the terms :meth:`terms`
     gives (the same weights), in chunks too; the search shows them as its best's progress."""
