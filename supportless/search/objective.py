@@ -58,8 +58,8 @@ __all__ = ["CHAIN_LIMIT", "FOOTPRINT_MM2", "HEAD_LIMIT", "INFEASIBLE", "INTERSEC
 #: other terms cost more than the least total measured is not measured.
 INTERSECT_CHUNK = 4
 
-#: At most this many of a batch (a swarm gathered where a limb rests on the body, at the allowed contact's few
-#: percent, had every pose of that band measured: half the Xbot's search).
+#: At most this many poses of a batch are measured so. Without a cap, a swarm gathered where a limb rests on the
+#: body (the allowed contact costing a few percent) had every pose of that band measured: half the Xbot's search.
 INTERSECT_MOST = 8
 
 #: Added to the value of a pose that breaks a hard rule (joint limit, standing):
