@@ -366,7 +366,7 @@ def forward_kinematics(joints: np.ndarray, bones: np.ndarray, angles: np.ndarray
     if order is None:
         order = topological_order(parents)
     roots = joints[bones[:, 0] if pivots is None else np.asarray(pivots, np.int64)]  # (m, d)
-    if d == 3:  # compiled, the same bits as the loop below
+    if d == 3:  # compiled (base/chain): the bits the loop below gives a 3D rig
         out = chain_transforms3(euler_to_matrix(angles), np.ascontiguousarray(roots), np.asarray(parents, np.int64),
                                 np.asarray(order, np.int64))
         return out[0] if single else out
