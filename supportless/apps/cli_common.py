@@ -39,11 +39,12 @@ def _console():
 
 
 def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_dir=None, quiet=False, height_mm=None,
-          keep_units=False, bones=None, skeleton_out=None):
+          keep_units=False, bones=None, skeleton_out=None, warm_up=False):
     """The rig of MODEL and its print frame (:mod:`supportless.files.printframe`; :func:`_say_frame` says it).
 
     The rig stays in the file's units; ``height_mm`` and ``keep_units`` only
-    choose how the files are printed.
+    choose how the files are printed. With ``warm_up`` (a command that searches), a first run's kernels are
+    compiled on both cores meanwhile (:mod:`supportless.apps.warmup`).
     """
     from ..base.crash import stage
     from ..files.printframe import rig_print_frame
@@ -57,8 +58,11 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
 
     if keep_units and height_mm is not None:
         _fail("--keep-units and --height-mm do not go together; choose one")
+    warming = start_warm_up() if warm_up else None
     rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
                    progress=progress, bones=bones, skeleton_out=skeleton_out)
+    if warming is not None:
+        finish_warm_up(warming, rig, progress)
     source = rig.info.get("gltf")
     if source is not None:  # what was done to the glTF asset, one line per step
         for line in source["log"]:
@@ -69,6 +73,25 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
             continue
         click.echo(f"supportless: warning: {rig.name}: {warning.removeprefix('warning: ')}", err=True)
     return rig, rig_print_frame(rig, height_mm, keep_units)
+
+
+def start_warm_up():
+    """:func:`supportless.apps.warmup.start`: a first run's kernels start compiling in a helper process."""
+    from .warmup import start
+
+    return start()
+
+
+def finish_warm_up(warming, rig, progress) -> None:
+    """Compile the rest of a first run's kernels here and wait for the helper (``progress(message)`` says so);
+    a planar figure's search needs none of them: the helper is stopped."""
+    if not warming.active:
+        return
+    if rig.dim != 3:
+        warming.cancel()
+        return
+    progress("compiling the numerical kernels: a first run only, on both cores")
+    warming.finish()
 
 
 def _say_frame(rig, frame, quiet=False) -> None:

@@ -15,7 +15,7 @@ import click
 from ..files.paths import check_output_paths
 from ..search.settings import SearchSettings
 from ..shapes import DEMO_FIGURES
-from .cli_common import EXIT_WRITE_FAILED, _console, _settings
+from .cli_common import EXIT_WRITE_FAILED, _console, _settings, finish_warm_up, start_warm_up
 from .cli_optimize import _run_search, _slice_and_report, _write_outputs
 from .cli_summary import _print_results
 
@@ -49,10 +49,13 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     console = _console()
     out = Path(out_dir)
     t0 = time.perf_counter()
+    warming = start_warm_up()
     rig = load_rig(f"demo:{figure}", up="y")
     console.print(f"{figure}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
                   f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones; "
                   f"rig ready in {time.perf_counter() - t0:.1f} s")
+    finish_warm_up(warming, rig, lambda message: None if quiet else console.print(f"  {message} ...",
+                                                                                  highlight=False))
     frame = rig_print_frame(rig)
     console.print(f"{frame.note()}")
     rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"

@@ -180,7 +180,7 @@ def optimize(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache
     _check_bones_early(settings, model, skeleton)
     with listening(_announce(console, quiet)):
         rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, quiet, height_mm, keep_units,
-                           bones=bones, skeleton_out=skeleton_out)
+                           bones=bones, skeleton_out=skeleton_out, warm_up=True)
     if slice_rank_count and rig.dim != 3:
         _fail(f"{model}: --slice-rank slices 3D models only; this one is planar")
     if slice_check_flag and rig.dim != 3:

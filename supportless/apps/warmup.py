@@ -1,0 +1,204 @@
+"""A first run's kernels compiled on both cores: half in a helper process while the rig is built, half here.
+
+numba compiles a kernel the first time it is called and keeps it in its cache (``cache=True``). A run after
+install therefore spends most of its time compiling, one kernel after another on one core: ``supportless demo``
+about 55 of its 65 s, ``supportless optimize`` of a glTF character about 65 of 110 s. :func:`start` gives the
+larger half of the kernels a search uses (:data:`KERNELS`) to a helper process, which compiles them into the
+same cache while this process builds the rig; :meth:`WarmUp.finish` then compiles the other half here and waits
+for the helper. Every kernel is then loaded from the cache where it is first called. Nothing changes in what the
+kernels compute: the cache holds the code numba would have compiled here.
+
+When numba's cache already holds every kernel, nothing is started. Should the helper fail, each kernel it did
+not compile is compiled where it is first called, as without a warm-up.
+"""
+
+from __future__ import annotations
+
+import atexit
+import importlib
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+
+__all__ = ["HELPER_TIMEOUT_S", "KERNELS", "Kernel", "WarmUp", "cold_kernels", "compile_kernels", "split", "start"]
+
+
+#: Seconds :meth:`WarmUp.finish` waits for the helper at most (its half takes about 30 s on 2 cores); past them
+#: it is stopped and each kernel it did not compile is compiled where it is first called.
+HELPER_TIMEOUT_S = 600.0
+
+
+@dataclass(frozen=True)
+class Kernel:
+    """A compiled kernel a 3D search calls from Python, with the one signature it is called with.
+
+    ``seconds`` is its compilation time on the machine of ``benchmarks/RESULTS.md`` (callees included), which
+    only balances the two halves.
+    """
+
+    module: str
+    name: str
+    signature: str
+    seconds: float
+
+    @property
+    def label(self) -> str:
+        """``module.name``."""
+        return f"{self.module}.{self.name}"
+
+
+_F1, _F2, _F3, _F4 = "float64[::1]", "float64[:, ::1]", "float64[:, :, ::1]", "float64[:, :, :, ::1]"
+_I1, _I2 = "int64[::1]", "int64[:, ::1]"
+
+#: The kernels a 3D search, its exact checks and its choice call from Python (``tests/apps/test_warmup.py`` checks
+#: that a run calls no other), largest first.
+KERNELS: tuple[Kernel, ...] = (
+    Kernel("supportless.energies._grid_fast", "_grid3_fast",
+           f"({_F3}, {_I2}, {_F2}, int64, float64, boolean, {_F3}, int32[:, ::1], {_F2}, int8[:, ::1], "
+           f"int32[:, ::1], {_I2}, {_F2}, int8[:, ::1], {_I2}, {_I2}, int32[:, ::1])", 16.0),
+    Kernel("supportless.base.crossing_filter", "_possibly", f"({_F2}, {_I2}, {_F2}, {_F2}, {_I2}, {_I2}, int64)",
+           14.0),
+    Kernel("supportless.energies.footprint", "_sections", f"({_F3}, {_I2}, {_F2}, {_F1})", 4.5),
+    Kernel("supportless.energies.arap", "_rotation_terms", f"({_F4},)", 4.5),
+    Kernel("supportless.base.closest", "_nearest", f"({_F2}, {_I1}, {_F2}, {_I2}, {_I1})", 4.5),
+    Kernel("supportless.energies.overhang", "_kernel3", f"({_F3}, {_I2}, {_F2}, {_F1}, float64, boolean[:, ::1], "
+           "float64)", 3.5),
+    Kernel("supportless.base.skinning", "_skin_dense3", f"({_F2}, {_F3}, {_F3})", 2.8),
+    Kernel("supportless.energies.surface", "_signed_measure", f"({_F3}, {_I2})", 2.5),
+    Kernel("supportless.base.kinematics", "_skin_blocks3", f"({_I1}, {_I1}, {_F2}, {_F3}, {_F3})", 2.0),
+    Kernel("supportless.base.crossing_filter", "_cells", f"({_F2}, {_F2}, {_F1}, float64)", 2.0),
+    Kernel("supportless.base.crossing_filter", "_boxes", f"({_F2}, {_I2})", 1.5),
+    Kernel("supportless.base.chain", "_chain3", f"({_F4}, {_F2}, {_I1}, {_I1}, {_F4})", 1.4),
+    Kernel("supportless.rig.balance", "_lowest", f"({_F3}, {_I1}, {_F1})", 1.3),
+    Kernel("supportless.base.graph", "_components", f"(int64, {_I1}, {_I1})", 1.2),
+    Kernel("supportless.base.chain", "_euler3", f"({_F2}, {_F3})", 0.6),
+)
+
+
+def _dispatcher(kernel: Kernel):
+    """The numba dispatcher of ``kernel``."""
+    return getattr(importlib.import_module(kernel.module), kernel.name)
+
+
+def _argument_types(kernel: Kernel) -> tuple:
+    """numba's argument types of ``kernel.signature``."""
+    from numba.core import sigutils
+
+    args, _ = sigutils.normalize_signature(kernel.signature)
+    return tuple(args)
+
+
+def compile_kernels(kernels) -> None:
+    """Compile each of ``kernels`` (or load it from numba's cache) in this process."""
+    for kernel in kernels:
+        _dispatcher(kernel).compile(_argument_types(kernel))
+
+
+def cold_kernels(kernels=KERNELS) -> list[Kernel]:
+    """The kernels of ``kernels`` numba's cache does not hold yet for this machine and their sources.
+
+    numba keeps no public record of its cache; its index is read as numba reads it. Should that fail (another
+    numba), no kernel is said to be cold: nothing is warmed, and each compiles where it is first called.
+    """
+    cold = []
+    try:
+        for kernel in kernels:
+            dispatcher = _dispatcher(kernel)
+            cache = dispatcher._cache
+            key = cache._index_key(_argument_types(kernel), dispatcher.targetctx.codegen())
+            if key not in cache._cache_file._load_index():
+                cold.append(kernel)
+    except Exception:  # noqa: BLE001 - numba's private cache layout changed: no warm-up, nothing lost
+        return []
+    return cold
+
+
+def split(kernels) -> tuple[list[Kernel], list[Kernel]]:
+    """``kernels`` in two halves of about equal compilation time, the helper's (the larger) first.
+
+    Each kernel, largest first, goes to the half with less time so far; ties go to the helper, which also
+    works while the rig is built.
+    """
+    helper, here = [], []
+    for kernel in sorted(kernels, key=lambda k: -k.seconds):
+        (helper if sum(k.seconds for k in helper) <= sum(k.seconds for k in here) else here).append(kernel)
+    return helper, here
+
+
+@dataclass
+class WarmUp:
+    """A warm-up under way: the helper process (None when nothing was started) and the kernels left here."""
+
+    here: list[Kernel] = field(default_factory=list)
+    helper: subprocess.Popen | None = None
+    started: float = field(default_factory=time.perf_counter)
+
+    @property
+    def active(self) -> bool:
+        """Whether any kernel was cold when the warm-up started."""
+        return bool(self.here) or self.helper is not None
+
+    def finish(self) -> float:
+        """Compile this process's half, wait for the helper; the seconds since :func:`start`."""
+        try:
+            compile_kernels(self.here)
+        finally:
+            self.here = []
+            if self.helper is not None:
+                try:
+                    self.helper.wait(timeout=HELPER_TIMEOUT_S)
+                except subprocess.TimeoutExpired:
+                    _stop(self.helper)
+                self.helper = None
+        return time.perf_counter() - self.started
+
+    def cancel(self) -> None:
+        """Stop the helper (the kernels are not needed: a planar figure)."""
+        self.here = []
+        if self.helper is not None:
+            _stop(self.helper)
+            self.helper = None
+
+
+def _stop(process: subprocess.Popen) -> None:
+    """End ``process`` if it still runs (numba writes each cache file whole, under a temporary name first)."""
+    if process.poll() is None:
+        process.kill()
+        process.wait()
+
+
+def start(kernels=KERNELS) -> WarmUp:
+    """Start compiling the cold kernels of ``kernels``: the helper's half in a process started now.
+
+    Returns
+    -------
+    warm_up : WarmUp
+        Its :meth:`~WarmUp.finish` compiles the other half here and waits for the helper. With one core, or
+        when the helper cannot be started, every cold kernel is left to :meth:`~WarmUp.finish`.
+    """
+    cold = cold_kernels(kernels)
+    if not cold:
+        return WarmUp()
+    helper, here = split(cold) if (os.cpu_count() or 1) > 1 else ([], cold)
+    if not helper:
+        return WarmUp(here=here)
+    try:
+        process = subprocess.Popen([sys.executable, "-m", __name__, *(k.label for k in helper)],
+                                   stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return WarmUp(here=cold)
+    atexit.register(_stop, process)  # an error before finish() leaves no process behind
+    return WarmUp(here=here, helper=process)
+
+
+def _main(labels: list[str]) -> int:
+    """The helper: compile the kernels named ``module.name``."""
+    by_label = {k.label: k for k in KERNELS}
+    compile_kernels([by_label[label] for label in labels if label in by_label])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(_main(sys.argv[1:]))
