@@ -8,8 +8,9 @@ same cache while this process builds the rig; :meth:`WarmUp.finish` then compile
 for the helper. Every kernel is then loaded from the cache where it is first called. Nothing changes in what the
 kernels compute: the cache holds the code numba would have compiled here.
 
-When numba's cache already holds every kernel, nothing is started. Should the helper fail, each kernel it did
-not compile is compiled where it is first called, as without a warm-up.
+When numba's cache already holds every kernel, nothing is started; nor with ``SUPPORTLESS_WARMUP=0`` in the
+environment (one process only, each kernel compiled where it is first called). Should the helper fail, each
+kernel it did not compile is compiled where it is first called, as without a warm-up.
 """
 
 from __future__ import annotations
@@ -176,8 +177,11 @@ def start(kernels=KERNELS) -> WarmUp:
     -------
     warm_up : WarmUp
         Its :meth:`~WarmUp.finish` compiles the other half here and waits for the helper. With one core, or
-        when the helper cannot be started, every cold kernel is left to :meth:`~WarmUp.finish`.
+        when the helper cannot be started, every cold kernel is left to :meth:`~WarmUp.finish`; with
+        ``SUPPORTLESS_WARMUP=0``, none.
     """
+    if os.environ.get("SUPPORTLESS_WARMUP", "").strip() == "0":
+        return WarmUp()
     cold = cold_kernels(kernels)
     if not cold:
         return WarmUp()
