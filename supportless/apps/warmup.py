@@ -1,12 +1,13 @@
-"""A first run's kernels compiled on both cores: half in a helper process while the rig is built, half here.
+"""A first run's kernels compiled on both cores: in a helper process while the rig is built, then in both.
 
 numba compiles a kernel the first time it is called and keeps it in its cache (``cache=True``). A run after
 install therefore spends most of its time compiling, one kernel after another on one core: ``supportless demo``
-about 55 of its 65 s, ``supportless optimize`` of a glTF character about 65 of 110 s. :func:`start` gives the
-larger half of the kernels a search uses (:data:`KERNELS`) to a helper process, which compiles them into the
-same cache while this process builds the rig; :meth:`WarmUp.finish` then compiles the other half here and waits
-for the helper. Every kernel is then loaded from the cache where it is first called. Nothing changes in what the
-kernels compute: the cache holds the code numba would have compiled here.
+about 55 of its 65 s, ``supportless optimize`` of a glTF character about 65 of 110 s. :func:`start` starts a
+helper process that compiles the kernels a search uses (:data:`KERNELS`), largest first, into the same cache
+while this process builds the rig; :meth:`WarmUp.finish` then compiles them here too, and each process takes
+the next kernel the other has not claimed (a file made once in a shared folder), so the two cores stay busy
+until the last. Every kernel is then loaded from the cache where it is first called. Nothing changes in what
+the kernels compute: the cache holds the code numba would have compiled here.
 
 When numba's cache already holds every kernel, nothing is started; nor with ``SUPPORTLESS_WARMUP=0`` in the
 environment (one process only, each kernel compiled where it is first called). Should the helper fail, each
@@ -18,12 +19,15 @@ from __future__ import annotations
 import atexit
 import importlib
 import os
+import shutil
 import subprocess
 import sys
-import time
+import tempfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
-__all__ = ["HELPER_TIMEOUT_S", "KERNELS", "Kernel", "WarmUp", "cold_kernels", "compile_kernels", "split", "start"]
+__all__ = ["HELPER_TIMEOUT_S", "KERNELS", "Kernel", "WarmUp", "claim", "cold_kernels", "compile_claimed", "compile_kernels",
+           "start"]
 
 
 #: Seconds :meth:`WarmUp.finish` waits for the helper at most (its half takes about 30 s on 2 cores); past them
@@ -36,7 +40,7 @@ class Kernel:
     """A compiled kernel a 3D search calls from Python, with the one signature it is called with.
 
     ``seconds`` is its compilation time on the machine of ``benchmarks/RESULTS.md`` (callees included), which
-    only balances the two halves.
+    only orders them: the largest are claimed first.
     """
 
     module: str
@@ -116,51 +120,67 @@ def cold_kernels(kernels=KERNELS) -> list[Kernel]:
     return cold
 
 
-def split(kernels) -> tuple[list[Kernel], list[Kernel]]:
-    """``kernels`` in two halves of about equal compilation time, the helper's (the larger) first.
+def claim(kernel: Kernel, claims: Path) -> bool:
+    """Whether this process is the first to claim ``kernel`` in the folder ``claims`` (by creating its file
+    there, which succeeds once)."""
+    try:
+        os.close(os.open(claims / kernel.label, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+    except FileExistsError:
+        return False
+    return True
 
-    Each kernel, largest first, goes to the half with less time so far; ties go to the helper, which also
-    works while the rig is built.
-    """
-    helper, here = [], []
-    for kernel in sorted(kernels, key=lambda k: -k.seconds):
-        (helper if sum(k.seconds for k in helper) <= sum(k.seconds for k in here) else here).append(kernel)
-    return helper, here
+
+def compile_claimed(kernels, claims: Path) -> list[Kernel]:
+    """Compile, in their order, the kernels of ``kernels`` that no other process has claimed in ``claims``;
+    those compiled here."""
+    mine = []
+    for kernel in kernels:
+        if claim(kernel, claims):
+            compile_kernels([kernel])
+            mine.append(kernel)
+    return mine
 
 
 @dataclass
 class WarmUp:
-    """A warm-up under way: the helper process (None when nothing was started) and the kernels left here."""
+    """A warm-up under way: the cold kernels (largest first), the folder of their claims and the helper
+    process (None when none was started)."""
 
-    here: list[Kernel] = field(default_factory=list)
+    cold: list[Kernel] = field(default_factory=list)
+    claims: Path | None = None
     helper: subprocess.Popen | None = None
-    started: float = field(default_factory=time.perf_counter)
 
     @property
     def active(self) -> bool:
         """Whether any kernel was cold when the warm-up started."""
-        return bool(self.here) or self.helper is not None
+        return bool(self.cold)
 
-    def finish(self) -> float:
-        """Compile this process's half, wait for the helper; the seconds since :func:`start`."""
+    def finish(self) -> list[Kernel]:
+        """Compile here each cold kernel the helper has not claimed, then wait for the helper; the kernels
+        compiled here."""
         try:
-            compile_kernels(self.here)
+            if self.claims is None:
+                compile_kernels(self.cold)
+                return list(self.cold)
+            return compile_claimed(self.cold, self.claims)
         finally:
-            self.here = []
-            if self.helper is not None:
+            self.cancel(wait=True)
+
+    def cancel(self, wait: bool = False) -> None:
+        """Stop the helper (the kernels are not needed: a planar figure) or, with ``wait``, let it end its
+        kernel first; the claims are removed."""
+        self.cold = []
+        if self.helper is not None:
+            if wait:
                 try:
                     self.helper.wait(timeout=HELPER_TIMEOUT_S)
                 except subprocess.TimeoutExpired:
-                    _stop(self.helper)
-                self.helper = None
-        return time.perf_counter() - self.started
-
-    def cancel(self) -> None:
-        """Stop the helper (the kernels are not needed: a planar figure)."""
-        self.here = []
-        if self.helper is not None:
+                    pass
             _stop(self.helper)
             self.helper = None
+        if self.claims is not None:
+            shutil.rmtree(self.claims, ignore_errors=True)
+            self.claims = None
 
 
 def _stop(process: subprocess.Popen) -> None:
@@ -171,38 +191,37 @@ def _stop(process: subprocess.Popen) -> None:
 
 
 def start(kernels=KERNELS) -> WarmUp:
-    """Start compiling the cold kernels of ``kernels``: the helper's half in a process started now.
+    """Start compiling the cold kernels of ``kernels`` in a helper process, largest first.
 
     Returns
     -------
     warm_up : WarmUp
-        Its :meth:`~WarmUp.finish` compiles the other half here and waits for the helper. With one core, or
-        when the helper cannot be started, every cold kernel is left to :meth:`~WarmUp.finish`; with
-        ``SUPPORTLESS_WARMUP=0``, none.
+        Its :meth:`~WarmUp.finish` compiles here each cold kernel the helper has not yet claimed, largest
+        first, and waits for the helper. With one core, or when the helper cannot be started, every cold kernel
+        is left to :meth:`~WarmUp.finish`; with ``SUPPORTLESS_WARMUP=0``, none.
     """
     if os.environ.get("SUPPORTLESS_WARMUP", "").strip() == "0":
         return WarmUp()
-    cold = cold_kernels(kernels)
-    if not cold:
-        return WarmUp()
-    helper, here = split(cold) if (os.cpu_count() or 1) > 1 else ([], cold)
-    if not helper:
-        return WarmUp(here=here)
+    cold = sorted(cold_kernels(kernels), key=lambda k: -k.seconds)
+    if not cold or (os.cpu_count() or 1) < 2:
+        return WarmUp(cold=cold)
+    claims = Path(tempfile.mkdtemp(prefix="supportless-warmup-"))
     try:
-        process = subprocess.Popen([sys.executable, "-m", __name__, *(k.label for k in helper)],
+        process = subprocess.Popen([sys.executable, "-m", __name__, str(claims), *(k.label for k in cold)],
                                    stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:
-        return WarmUp(here=cold)
-    atexit.register(_stop, process)  # an error before finish() leaves no process behind
-    return WarmUp(here=here, helper=process)
+        return WarmUp(cold=cold, claims=claims)
+    warming = WarmUp(cold=cold, claims=claims, helper=process)
+    atexit.register(warming.cancel)  # an error before finish() leaves no process and no claims behind
+    return warming
 
 
-def _main(labels: list[str]) -> int:
-    """The helper: compile the kernels named ``module.name``."""
+def _main(claims: str, labels: list[str]) -> int:
+    """The helper: compile the kernels named ``module.name`` that the run has not claimed in ``claims``."""
     by_label = {k.label: k for k in KERNELS}
-    compile_kernels([by_label[label] for label in labels if label in by_label])
+    compile_claimed([by_label[label] for label in labels if label in by_label], Path(claims))
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(_main(sys.argv[1:]))
+    sys.exit(_main(sys.argv[1], sys.argv[2:]))

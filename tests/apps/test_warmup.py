@@ -17,19 +17,19 @@ import numba
 import pytest
 
 from supportless.apps import warmup
-from supportless.apps.warmup import KERNELS, Kernel, split
+from supportless.apps.warmup import KERNELS, Kernel
 
 
-def test_split_keeps_every_kernel_once_and_balances_the_halves():
-    kernels = [Kernel("m", name, "()", s) for name, s in zip("abcde", (5.0, 4.0, 3.0, 3.0, 1.0))]
-    helper, here = split(kernels)
-    assert sorted(k.name for k in helper + here) == list("abcde")
-    # largest first, each to the lighter half (ties to the helper): a 5 | b 4, c 3 (4 < 5) | d 3 (5 <= 7) | e 1
-    assert [k.name for k in helper] == ["a", "d"] and [k.name for k in here] == ["b", "c", "e"]
-    helper, here = split(KERNELS)
-    gap = abs(sum(k.seconds for k in helper) - sum(k.seconds for k in here))
-    assert gap <= max(k.seconds for k in KERNELS)
-    assert split([]) == ([], [])
+def test_each_kernel_is_compiled_by_the_process_that_claims_it_first(tmp_path, monkeypatch):
+    compiled = []
+    monkeypatch.setattr(warmup, "compile_kernels", lambda kernels: compiled.extend(k.name for k in kernels))
+    kernels = [Kernel("m", name, "()", s) for name, s in zip("abc", (3.0, 2.0, 1.0))]
+    assert warmup.claim(kernels[1], tmp_path)  # the other process took b
+    assert not warmup.claim(kernels[1], tmp_path)
+    assert [k.name for k in warmup.compile_claimed(kernels, tmp_path)] == ["a", "c"]
+    assert compiled == ["a", "c"]
+    assert warmup.compile_claimed(kernels, tmp_path) == [] and compiled == ["a", "c"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.a", "m.b", "m.c"]
 
 
 def test_every_listed_kernel_is_a_cached_numba_kernel_with_its_arity():
@@ -76,27 +76,35 @@ def test_a_search_calls_no_kernel_the_warm_up_does_not_compile(shared_file):
     assert found["uncalled"] == []
 
 
-def test_the_helper_compiles_its_half_into_the_cache(tmp_path):
-    """With an empty cache every kernel is cold; a warm-up of the smallest one leaves it in the cache, compiled
-    by the helper process (this process only waited, its dispatcher holds nothing); then nothing is cold."""
+def test_the_helper_and_a_warm_up_leave_their_kernels_in_the_cache(tmp_path):
+    """With an empty cache every kernel is cold. The helper, run as :func:`warmup.start` runs it, compiles the
+    kernel it claims into the cache (this process compiles nothing); a whole warm-up (:func:`warmup.start`, then
+    :meth:`WarmUp.finish`) of another leaves it in the cache and its claims removed; then nothing is cold."""
     if (os.cpu_count() or 1) < 2:
         pytest.skip("one core: the warm-up compiles every kernel in the calling process, no helper to test")
-    smallest = min(KERNELS, key=lambda k: k.seconds)
+    first, second = sorted(KERNELS, key=lambda k: k.seconds)[:2]
     script = textwrap.dedent(f"""
-        import json
+        import json, os, subprocess, sys, tempfile
         from supportless.apps import warmup
-        kernel = [k for k in warmup.KERNELS if k.label == {smallest.label!r}]
+        first, second = ([k for k in warmup.KERNELS if k.label == label] for label in ({first.label!r},
+                                                                                      {second.label!r}))
         cold = len(warmup.cold_kernels())
-        warming = warmup.start(kernel)
-        helped = warming.helper is not None and warming.here == []
+        claims = tempfile.mkdtemp()
+        subprocess.run([sys.executable, "-m", "supportless.apps.warmup", claims, first[0].label], check=True)
+        helper = {{"claimed": os.listdir(claims), "cold": len(warmup.cold_kernels(first)),
+                   "here": len(warmup._dispatcher(first[0]).signatures)}}
+        warming = warmup.start(second)
+        started, folder = warming.helper is not None, warming.claims
         warming.finish()
-        again = warmup.start(kernel)  # a warm cache: nothing to start
-        print(json.dumps({{"cold": cold, "helped": helped, "after": len(warmup.cold_kernels(kernel)),
-                           "signatures": len(warmup._dispatcher(kernel[0]).signatures), "again": again.active}}))
+        whole = {{"started": started, "cold": len(warmup.cold_kernels(second)),
+                  "claims_left": os.path.exists(folder), "helper_left": warming.helper is not None}}
+        print(json.dumps({{"cold": cold, "helper": helper, "whole": whole,
+                           "again": warmup.start(first + second).active}}))
     """)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600, env=env)
     assert out.returncode == 0, out.stderr[-2000:]
     found = json.loads(out.stdout.strip().splitlines()[-1])
-    assert found == {"cold": len(KERNELS), "helped": True, "after": 0, "signatures": 0, "again": False}
-
+    assert found == {"cold": len(KERNELS), "helper": {"claimed": [first.label], "cold": 0, "here": 0},
+                     "whole": {"started": True, "cold": 0, "claims_left": False, "helper_left": False},
+                     "again": False}
