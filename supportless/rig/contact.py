@@ -43,7 +43,7 @@ import numpy as np
 from ..base.closest import nearest_other_face
 
 __all__ = ["CONTACT_DEPTH", "CONTACT_HOPS", "CONTACT_REACH", "CONTACT_VOLUME", "BodyParts", "ContactRules",
-           "ContactVerdict", "contact_verdict"]
+           "ContactVerdict", "RefusedCrossings", "contact_verdict", "refused_by_pairs"]
 
 #: Parts at most this many steps apart are "jointed" (a step into a bone that owns no triangle is free): upper
 #: arm and chest (through the shoulder) 2, the two thighs (at the hips) 1. A forearm and the chest are 3, a hand
@@ -236,28 +236,11 @@ def contact_verdict(parts: BodyParts, vertices: np.ndarray, posed_joints: np.nda
     if not rules.allows_contact:
         return ContactVerdict(False, k, f"{k} pairs of triangles cross", overlap_volume=volume)
     V = np.asarray(vertices, np.float64)
-    F = parts.faces
-    ba, bb = parts.face_bone[pairs[:, 0]], parts.face_bone[pairs[:, 1]]
-    lo, hi = np.minimum(ba, bb), np.maximum(ba, bb)
-    hops = parts.hops[lo, hi]
+    reason, regions = _pair_rules(parts, V, posed_joints, pairs, rules)
+    if reason is not None:
+        return ContactVerdict(False, k, reason, overlap_volume=volume)
     names = _name_of(parts)
-    far = np.flatnonzero(hops > rules.hops)
-    if len(far):
-        i = far[0]
-        return ContactVerdict(False, k, f"{names(lo[i])} crosses {names(hi[i])}, a part it is not jointed to "
-                              f"({len(far)} of {k} pairs)", overlap_volume=volume)
-    where = V[F[pairs]].reshape(k, 6, 3).mean(axis=1)  # (k, 3) a point of each crossing
-    regions = []
-    for a, b in np.unique(np.stack([lo, hi], 1), axis=0):
-        mine = np.flatnonzero((lo == a) & (hi == b))
-        J = posed_joints[parts.path_joints(int(a), int(b))]
-        reach = rules.reach * max(parts.lengths[a], parts.lengths[b], 1e-12)
-        dist = np.min(np.linalg.norm(where[mine, None, :] - J[None, :, :], axis=2), axis=1)
-        if np.any(dist > reach):
-            return ContactVerdict(False, k, f"{names(a)} and {names(b)} cross {dist.max() / reach:.1f}x farther "
-                                  f"from their shared joint than a contact may", overlap_volume=volume)
-        regions.append({"bones": [int(a), int(b)], "pairs": int(len(mine)), "depth": 0.0})
-    deepest = _deepest(parts, V, np.unique(np.concatenate([lo, hi])))
+    deepest = _deepest(parts, V, np.unique(parts.face_bone[pairs]))
     for region in regions:
         a, b = region["bones"]
         d = max(deepest.get((a, b), 0.0), deepest.get((b, a), 0.0))
@@ -274,6 +257,90 @@ def contact_verdict(parts: BodyParts, vertices: np.ndarray, posed_joints: np.nda
         return ContactVerdict(False, k, f"the contact covers {overlap_volume / body_volume:.1%} of the body's "
                               f"volume twice (at most {rules.volume:.0%})", regions, volume)
     return ContactVerdict(True, k, "", regions, volume)
+
+
+def _pair_rules(parts: BodyParts, V: np.ndarray, posed_joints: np.ndarray, pairs: np.ndarray,
+                rules: ContactRules) -> tuple[str | None, list[dict]]:
+    """The rules each crossing pair (k, 2) int64 keeps or breaks by itself: the two parts are jointed, and the
+    crossing is near a joint between them. The first broken one's reason (None when none is), and the contact
+    regions of the pairs (``{"bones", "pairs", "depth": 0.0}``; none when a rule is broken)."""
+    k = len(pairs)
+    ba, bb = parts.face_bone[pairs[:, 0]], parts.face_bone[pairs[:, 1]]
+    lo, hi = np.minimum(ba, bb), np.maximum(ba, bb)
+    names = _name_of(parts)
+    far = np.flatnonzero(parts.hops[lo, hi] > rules.hops)
+    if len(far):
+        i = far[0]
+        return f"{names(lo[i])} crosses {names(hi[i])}, a part it is not jointed to ({len(far)} of {k} pairs)", []
+    where = V[parts.faces[pairs]].reshape(k, 6, 3).mean(axis=1)  # (k, 3) a point of each crossing
+    regions = []
+    for a, b in np.unique(np.stack([lo, hi], 1), axis=0):
+        mine = np.flatnonzero((lo == a) & (hi == b))
+        J = posed_joints[parts.path_joints(int(a), int(b))]
+        reach = rules.reach * max(parts.lengths[a], parts.lengths[b], 1e-12)
+        dist = np.min(np.linalg.norm(where[mine, None, :] - J[None, :, :], axis=2), axis=1)
+        if np.any(dist > reach):
+            return (f"{names(a)} and {names(b)} cross {dist.max() / reach:.1f}x farther from their shared joint "
+                    "than a contact may"), []
+        regions.append({"bones": [int(a), int(b)], "pairs": int(len(mine)), "depth": 0.0})
+    return None, regions
+
+
+def refused_by_pairs(parts: BodyParts, vertices: np.ndarray, posed_joints: np.ndarray, pairs: np.ndarray,
+                     rules: ContactRules) -> bool:
+    """Whether some of a posed surface's crossing pairs refuse it by themselves.
+
+    They do when no contact is allowed, or when one of them joins parts that are not jointed or crosses too far
+    from their joint (:func:`_pair_rules`). Each such rule judges a pair alone, so the surface is refused by
+    :func:`contact_verdict` of all its pairs as well, whatever the others are.
+
+    Parameters
+    ----------
+    parts : BodyParts
+    vertices : (n, 3) float64
+        The posed surface, with ``posed_joints`` (j, 3) float64 in the same placement.
+    pairs : (k, 2) int64
+        Some of its intersecting triangle pairs.
+    rules : ContactRules
+
+    Returns
+    -------
+    refused : bool
+        False for no pairs.
+    """
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    if not len(pairs):
+        return False
+    if not rules.allows_contact:
+        return True
+    return _pair_rules(parts, np.asarray(vertices, np.float64), posed_joints, pairs, rules)[0] is not None
+
+
+class RefusedCrossings:
+    """The triangles of the last refused pose's crossings, asked first about the next pose.
+
+    A search keeps proposing poses near the one refused last (a forearm through the hips again), whose crossings
+    are mostly among the same triangles. CGAL's pairs among some triangles are pairs of the whole surface, so
+    when those refuse the pose by themselves (:func:`refused_by_pairs`), :func:`contact_verdict` of all its pairs
+    refuses it too, and the exact test of the whole surface is not needed.
+    """
+
+    def __init__(self):
+        self.faces: np.ndarray | None = None
+
+    def refuse(self, parts: BodyParts, vertices: np.ndarray, posed_joints: np.ndarray, rules: ContactRules) -> bool:
+        """Whether the remembered triangles' crossings in the posed ``vertices`` (n, 3) float64 refuse it by
+        themselves (False when nothing is remembered)."""
+        if self.faces is None:
+            return False
+        from ..copyleft.cgal import intersecting_faces
+
+        pairs = intersecting_faces(vertices, parts.faces[self.faces])
+        return refused_by_pairs(parts, vertices, posed_joints, self.faces[pairs], rules)
+
+    def remember(self, pairs: np.ndarray) -> None:
+        """Keep the triangles of a refused pose's crossing pairs (k, 2) int64."""
+        self.faces = np.unique(np.asarray(pairs, np.int64))
 
 
 def _deepest(parts: BodyParts, V: np.ndarray, bones: np.ndarray) -> dict:

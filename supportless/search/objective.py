@@ -40,7 +40,7 @@ from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from ..files.printframe import REFERENCE_HEIGHT_MM
-from ..rig.contact import ContactRules
+from ..rig.contact import ContactRules, RefusedCrossings
 from ..rig.rig import Rig
 from .anatomy import JointRanges
 from .naturalness import chain_ends, head_bones, rotation_angle_deg
@@ -217,7 +217,7 @@ class Objective:
         self.head_limit = None if head_limit is None else float(head_limit)
         self._heads = head_bones(rig) if head_limit is not None else np.zeros(0, np.int64)
         self.joint_ranges = joint_ranges
-        self.contact = contact
+        self.contact, self._refused = contact, RefusedCrossings()  # the triangles of the last refused crossings
         self.footprint_mm2 = None if not footprint_mm2 else float(footprint_mm2)
         self.print_height_mm = float(print_height_mm)
 
@@ -438,23 +438,24 @@ class Objective:
     def forbidden(self, angles: np.ndarray) -> bool:
         """Whether the pose ``angles (m, 3) float64`` crosses itself other than by contact within the rules.
 
-        CGAL's exact test (stopping at the first crossing when no contact is allowed); a pose that crosses is
-        then judged by :meth:`Rig.crossings` with :attr:`contact` from the pairs of one CGAL call, and last by
-        its ray-grid overlap (measured only for a pose the other rules allow: the volume rule is the verdict's
-        last). False in 2D.
-        """
+        CGAL's exact test (stopping at the first crossing when no contact is allowed); a crossing pose is then judged
+        by :meth:`Rig.crossings` with :attr:`contact` from one CGAL call's pairs, last by its ray-grid overlap
+        (measured only when the other rules allow it: the volume rule is the verdict's last). The last refused pose's
+        crossing triangles are asked first (:class:`~supportless.rig.contact.RefusedCrossings`): the same verdict."""
         rig = self.rig
         if rig.dim != 3:
             return False
         if self.contact is None or not self.contact.allows_contact:
             return rig.self_intersects(angles)
-        V = rig.pose(angles)
-        pairs = intersecting_faces(V, rig.faces)
-        if not len(pairs):
-            return False
-        if not rig.crossings(V, rig.posed_joints(angles), self.contact, None, pairs).allowed:
+        V, J = rig.pose(angles), rig.posed_joints(angles)
+        if self._refused.refuse(rig.body_parts, V, J, self.contact):  # the last refused pose's crossings again
             return True
-        return self.contact.covers_too_much(float(np.asarray(self._intersection(V[None]))[0]), rig.rest_volume)
+        pairs = intersecting_faces(V, rig.faces)
+        if len(pairs) and not rig.crossings(V, J, self.contact, None, pairs).allowed:
+            self._refused.remember(pairs)
+            return True
+        return bool(len(pairs)) and self.contact.covers_too_much(float(np.asarray(self._intersection(V[None]))[0]),
+                                                                 rig.rest_volume)
 
     def combine(self, terms: dict) -> np.ndarray:
         """Weighted sum of normalised terms, plus ``INFEASIBLE + violation`` where a hard rule is broken."""

@@ -14,7 +14,8 @@ import supportless as sl
 from supportless.base.kinematics import matrix_to_euler
 from supportless.copyleft.cgal import intersecting_faces
 from supportless.files.printbody import united_surface
-from supportless.rig.contact import CONTACT_HOPS, BodyParts, ContactRules, contact_verdict
+from supportless.rig.contact import (CONTACT_HOPS, BodyParts, ContactRules, RefusedCrossings, contact_verdict,
+                                     refused_by_pairs)
 
 SHOULDER, UPPER_ARM, FOREARM, HEAD, LEFT_THIGH, RIGHT_THIGH = 3, 4, 5, 2, 9, 12
 
@@ -169,3 +170,64 @@ def test_the_search_gate_is_the_verdict_with_its_overlap(tpose_rig, rules):
         assert objective.forbidden(A) == (not verdict(tpose_rig, A, rules).allowed)
     # the three rules decide differently on the arm let down: allowed, too much volume, too deep
     assert [objective.forbidden(turned(tpose_rig, ARM_DOWN))] == [rules != ContactRules()]
+
+
+@pytest.mark.parametrize("pose", [HAND_TO_HEAD, ARM_DOWN])
+def test_pairs_that_refuse_by_themselves_refuse_any_set_holding_them(tpose_rig, pose):
+    """The rules :func:`refused_by_pairs` applies judge each pair alone: random subsets of a pose's crossing pairs
+    refuse only when the verdict of all of them refuses (the forearm through the head), and never when it allows
+    (the arm let down against the chest)."""
+    A = turned(tpose_rig, pose)
+    V, J, parts = tpose_rig.pose(A), tpose_rig.posed_joints(A), tpose_rig.body_parts
+    pairs = intersecting_faces(V, tpose_rig.faces)
+    whole = contact_verdict(parts, V, J, pairs, ContactRules())
+    assert len(pairs) > 1
+    assert refused_by_pairs(parts, V, J, pairs, ContactRules()) == (not whole.allowed)
+    rng = np.random.default_rng(3)
+    verdicts = [refused_by_pairs(parts, V, J, pairs[rng.random(len(pairs)) < share], ContactRules())
+                for share in (0.1, 0.3, 0.5, 0.8) for _ in range(5)]
+    if whole.allowed:
+        assert not any(verdicts)
+    else:
+        assert any(verdicts)  # some subsets hold a pair through the head
+    assert not refused_by_pairs(parts, V, J, np.zeros((0, 2), np.int64), ContactRules())
+    assert refused_by_pairs(parts, V, J, pairs[:1], ContactRules(hops=-1))  # no contact allowed: any pair refuses
+
+
+def test_the_last_refused_crossings_are_asked_first(tpose_rig, monkeypatch):
+    """After the forearm through the head is refused, a pose near it is refused from its remembered triangles
+    alone (no exact test of the whole surface); a pose whose crossings lie elsewhere is tested whole."""
+    from supportless.search import objective as objective_module
+
+    whole = []
+    exact = objective_module.intersecting_faces
+
+    def counted(V, F):
+        whole.append(len(F))
+        return exact(V, F)
+
+    monkeypatch.setattr(objective_module, "intersecting_faces", counted)
+    objective = sl.SearchSettings().objective(tpose_rig)
+    assert objective.forbidden(turned(tpose_rig, HAND_TO_HEAD)) and whole == [len(tpose_rig.faces)]
+    remembered = objective._refused.faces
+    assert remembered is not None and 0 < len(remembered) < len(tpose_rig.faces)
+    near = {UPPER_ARM: ((0, 0, 1), 42), FOREARM: ((0, 0, 1), 148)}
+    assert objective.forbidden(turned(tpose_rig, near)) and len(whole) == 1
+    assert not objective.forbidden(turned(tpose_rig, ARM_DOWN)) and len(whole) == 2
+    assert np.array_equal(objective._refused.faces, remembered)  # an allowed pose is not remembered
+    memory = RefusedCrossings()
+    assert not memory.refuse(tpose_rig.body_parts, tpose_rig.vertices, tpose_rig.joints, ContactRules())
+
+
+def test_a_search_gate_with_a_memory_says_what_a_fresh_one_says(tpose_rig):
+    """One objective judging a sequence of random poses (each asked first about the last refused pose's
+    triangles) gives the verdicts of a fresh objective per pose."""
+    rng = np.random.default_rng(11)
+    poses = [np.radians(rng.uniform(-100, 100, (tpose_rig.bone_count, 3))) * (rng.random((tpose_rig.bone_count, 1))
+                                                                             < 0.4) for _ in range(14)]
+    poses = [p for pair in zip(poses, poses) for p in pair]  # each twice: the second is asked from the memory
+    kept = sl.SearchSettings().objective(tpose_rig)
+    mine = [kept.forbidden(A) for A in poses]
+    fresh = [sl.SearchSettings().objective(tpose_rig).forbidden(A) for A in poses]
+    assert mine == fresh
+    assert 0 < sum(mine) < len(mine)  # both verdicts occur
