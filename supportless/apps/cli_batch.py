@@ -19,6 +19,7 @@ from .cli_common import (
     _settings,
     _slicer_setup,
     slicer_options,
+    start_warm_up,
 )
 
 __all__ = ["batch"]
@@ -63,6 +64,12 @@ def batch(in_dir, out_dir, up, height_mm, cache_dir, slice_check_flag, scheduler
     except ImportError:
         _fail("batch runs on Dask, which is not installed: pip install 'supportless[dask]'")
     console = _console()
+    if scheduler is None and specs:  # local workers load this machine's kernels: a first run compiles them once here
+        warming = start_warm_up()
+        if warming.active:
+            if not quiet:
+                console.print("  compiling the numerical kernels: a first run only, on both cores ...", highlight=False)
+            warming.finish()
     progress = Progress(TextColumn("[bold]models"), BarColumn(bar_width=20), MofNCompleteColumn(), TimeElapsedColumn(),
                         console=console, disable=quiet)
     counts = {"ok": 0, "failed": 0, "skipped": 0}

@@ -90,13 +90,24 @@ def test_meshes_sharing_a_name_are_one_failed_model(folder):
 
 
 @pytest.mark.slow
-def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path, warm_cache):
+def test_local_cluster_two_ok_two_failed_then_a_rerun_skips_the_finished(folder, tmp_path, warm_cache, monkeypatch):
+    from supportless.apps import cli_batch
     from supportless.apps.cli import main
 
+    warm_up = []  # a local cluster's workers load the kernels the run compiled first (faked here: a cold cache)
+
+    class Cold:
+        active = True
+
+        def finish(self):
+            warm_up.append("finished")
+
+    monkeypatch.setattr(cli_batch, "start_warm_up", lambda: warm_up.append("started") or Cold())
     out = tmp_path / "out"
     args = ["batch", str(folder), "-o", str(out), "--workers", "2", "--cache-dir", str(warm_cache), *FAST]
     first = CliRunner().invoke(main, args)
     assert first.exit_code == 1, first.output  # some models failed
+    assert warm_up == ["started", "finished"] and "compiling the numerical kernels" in first.output
     rows = _summary(out)
     assert list(rows["arm"]) == list(COLUMNS)
     assert {m: r["status"] for m, r in rows.items()} == {"arm": "ok", "branch": "ok", "broken": "failed",
