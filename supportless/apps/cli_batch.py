@@ -18,6 +18,7 @@ from .cli_common import (
     _search_options,
     _settings,
     _slicer_setup,
+    finish_warm_up,
     slicer_options,
     start_warm_up,
 )
@@ -65,11 +66,8 @@ def batch(in_dir, out_dir, up, height_mm, cache_dir, slice_check_flag, scheduler
         _fail("batch runs on Dask, which is not installed: pip install 'supportless[dask]'")
     console = _console()
     if scheduler is None and specs:  # local workers load this machine's kernels: a first run compiles them once here
-        warming = start_warm_up()
-        if warming.active:
-            if not quiet:
-                console.print("  compiling the numerical kernels: a first run only, on both cores ...", highlight=False)
-            warming.finish()
+        finish_warm_up(start_warm_up(), lambda message: None if quiet else console.print(f"  {message} ...",
+                                                                                          highlight=False))
     progress = Progress(TextColumn("[bold]models"), BarColumn(bar_width=20), MofNCompleteColumn(), TimeElapsedColumn(),
                         console=console, disable=quiet)
     counts = {"ok": 0, "failed": 0, "skipped": 0}

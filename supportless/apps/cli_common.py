@@ -62,7 +62,7 @@ def _load(model, skeleton, up, tets=None, weights=None, no_cache=False, cache_di
     rig = load_rig(model, skeleton, up, tets=tets, weights=weights, cache=not no_cache, cache_dir=cache_dir,
                    progress=progress, bones=bones, skeleton_out=skeleton_out)
     if warming is not None:
-        finish_warm_up(warming, rig, progress)
+        finish_warm_up(warming, progress, planar=rig.dim != 3)
     source = rig.info.get("gltf")
     if source is not None:  # what was done to the glTF asset, one line per step
         for line in source["log"]:
@@ -82,12 +82,12 @@ def start_warm_up():
     return start()
 
 
-def finish_warm_up(warming, rig, progress) -> None:
+def finish_warm_up(warming, progress, planar: bool = False) -> None:
     """Compile the rest of a first run's kernels here and wait for the helper (``progress(message)`` says so);
     a planar figure's search needs none of them: the helper is stopped."""
     if not warming.active:
         return
-    if rig.dim != 3:
+    if planar:
         warming.cancel()
         return
     progress("compiling the numerical kernels: a first run only, on both cores")

@@ -54,8 +54,8 @@ def demo(out_dir, figure, particles, iterations, seed, quiet):
     console.print(f"{figure}: {len(rig.vertices)} vertices, {len(rig.faces)} faces, {len(rig.tets)} "
                   f"{'tets' if rig.dim == 3 else 'triangles'}, {rig.bone_count} bones; "
                   f"rig ready in {time.perf_counter() - t0:.1f} s")
-    finish_warm_up(warming, rig, lambda message: None if quiet else console.print(f"  {message} ...",
-                                                                                  highlight=False))
+    finish_warm_up(warming, lambda message: None if quiet else console.print(f"  {message} ...", highlight=False),
+                   planar=rig.dim != 3)
     frame = rig_print_frame(rig)
     console.print(f"{frame.note()}")
     rest_mesh = out / f"{figure}-rest.stl" if rig.dim == 3 else out / f"{figure}-rest.obj"
