@@ -1,8 +1,10 @@
 """A first run's kernels compiled on both cores: in a helper process while the rig is built, then in both.
 
 numba compiles a kernel the first time it is called and keeps it in its cache (``cache=True``). A run after
-install therefore spends most of its time compiling, one kernel after another on one core: ``supportless demo``
-about 55 of its 65 s, ``supportless optimize`` of a glTF character about 65 of 110 s. :func:`start` starts a
+install therefore spends much of its time compiling, one kernel after another on one core: the kernels of a
+search take 28 s (they took 51 s while numba built their loops' parallel versions; they are now serial, split
+over threads by :mod:`supportless.base.threads`), against 11 s for the whole of a warm ``supportless demo``.
+:func:`start` starts a
 helper process that compiles the kernels a search uses (:data:`KERNELS`), largest first, into the same cache
 while this process builds the rig; :meth:`WarmUp.finish` then compiles them here too, and each process takes
 the next kernel the other has not claimed (a file made once in a shared folder), so the two cores stay busy
@@ -30,7 +32,7 @@ __all__ = ["HELPER_TIMEOUT_S", "KERNELS", "Kernel", "WarmUp", "claim", "cold_ker
            "start"]
 
 
-#: Seconds :meth:`WarmUp.finish` waits for the helper at most (its half takes about 30 s on 2 cores); past them
+#: Seconds :meth:`WarmUp.finish` waits for the helper at most (its half takes about 15 s on 2 cores); past them
 #: it is stopped and each kernel it did not compile is compiled where it is first called.
 HELPER_TIMEOUT_S = 600.0
 
@@ -61,23 +63,29 @@ _I1, _I2 = "int64[::1]", "int64[:, ::1]"
 #: that a run calls no other), largest first.
 KERNELS: tuple[Kernel, ...] = (
     Kernel("supportless.energies._grid_fast", "_grid3_fast",
-           f"({_F3}, {_I2}, {_F2}, int64, float64, boolean, {_F3}, int32[:, ::1], {_F2}, int8[:, ::1], "
-           f"int32[:, ::1], {_I2}, {_F2}, int8[:, ::1], {_I2}, {_I2}, int32[:, ::1])", 16.0),
-    Kernel("supportless.base.crossing_filter", "_possibly", f"({_F2}, {_I2}, {_F2}, {_F2}, {_I2}, {_I2}, int64)",
-           14.0),
-    Kernel("supportless.energies.footprint", "_sections", f"({_F3}, {_I2}, {_F2}, {_F1})", 4.5),
-    Kernel("supportless.energies.arap", "_rotation_terms", f"({_F4},)", 4.5),
-    Kernel("supportless.base.closest", "_nearest", f"({_F2}, {_I1}, {_F2}, {_I2}, {_I1})", 4.5),
-    Kernel("supportless.energies.overhang", "_kernel3", f"({_F3}, {_I2}, {_F2}, {_F1}, float64, boolean[:, ::1], "
-           "float64)", 3.5),
-    Kernel("supportless.base.skinning", "_skin_dense3", f"({_F2}, {_F3}, {_F3})", 2.8),
-    Kernel("supportless.energies.surface", "_signed_measure", f"({_F3}, {_I2})", 2.5),
-    Kernel("supportless.base.kinematics", "_skin_blocks3", f"({_I1}, {_I1}, {_F2}, {_F3}, {_F3})", 2.0),
-    Kernel("supportless.base.crossing_filter", "_cells", f"({_F2}, {_F2}, {_F1}, float64)", 2.0),
-    Kernel("supportless.base.crossing_filter", "_boxes", f"({_F2}, {_I2})", 1.5),
-    Kernel("supportless.base.chain", "_chain3", f"({_F4}, {_F2}, {_I1}, {_I1}, {_F4})", 1.4),
-    Kernel("supportless.rig.balance", "_lowest", f"({_F3}, {_I1}, {_F1})", 1.3),
-    Kernel("supportless.base.graph", "_components", f"(int64, {_I1}, {_I1})", 1.2),
+           f"({_F3}, {_I2}, {_F2}, int64, float64, boolean, {_F2}, int32[::1], {_F1}, int8[::1], int32[::1], {_I1}, "
+           f"{_F1}, int8[::1], {_I1}, {_I1}, int32[::1], int64, int64, {_F2}, boolean[::1])", 8.2),
+    Kernel("supportless.base.crossing_filter", "_pairs",
+           f"({_F2}, {_I2}, {_F2}, {_F2}, {_I2}, {_I1}, {_I1}, int32[::1], boolean[::1], int64, int64)", 6.0),
+    Kernel("supportless.energies.arap", "_rotation_terms_of", f"({_F4}, {_F1}, int64, int64)", 3.0),
+    Kernel("supportless.base.closest", "_nearest_of", f"({_F2}, {_I1}, {_F2}, {_I2}, {_I1}, {_F1}, {_I1}, int64, int64)",
+           1.9),
+    Kernel("supportless.base.graph", "_components", f"(int64, {_I1}, {_I1})", 1.8),
+    Kernel("supportless.energies.overhang", "_kernel3_poses", f"({_F3}, {_I2}, {_F2}, {_F1}, float64, boolean[:, ::1], "
+           f"float64, {_F2}, int64, int64)", 1.6),
+    Kernel("supportless.base.chain", "_chain3", f"({_F4}, {_F2}, {_I1}, {_I1}, {_F4})", 1.6),
+    Kernel("supportless.base.skinning", "_skin_dense3", f"({_F2}, {_F3}, {_F3}, int64, int64)", 1.5),
+    Kernel("supportless.energies.surface", "_signed_measure_of", f"({_F3}, {_I2}, {_F1}, int64, int64)", 1.4),
+    Kernel("supportless.base.crossing_filter", "_grouped", f"({_I1}, int32[::1], int64, int64)", 1.4),
+    Kernel("supportless.energies.footprint", "_sections_of", f"({_F3}, {_I2}, {_F2}, {_F1}, {_F1}, int64, int64)",
+           1.3),
+    Kernel("supportless.rig.balance", "_lowest_of", f"({_F3}, {_I1}, {_F1}, {_F1}, int64, int64)", 1.0),
+    Kernel("supportless.base.crossing_filter", "_cells_of", f"({_F2}, {_F2}, {_F1}, float64, {_I2}, {_I2}, {_F1}, int64, "
+           "int64)", 0.9),
+    Kernel("supportless.base.kinematics", "_skin_blocks3", f"({_I1}, {_I1}, {_F2}, {_F3}, {_F3}, int64, int64)", 0.9),
+    Kernel("supportless.base.crossing_filter", "_entries", f"({_I2}, {_I2}, {_I1}, {_I1}, int32[::1], int64, int64)",
+           0.8),
+    Kernel("supportless.base.crossing_filter", "_boxes_of", f"({_F2}, {_I2}, {_F2}, {_F2}, int64, int64)", 0.6),
     Kernel("supportless.base.chain", "_euler3", f"({_F2}, {_F3})", 0.6),
 )
 

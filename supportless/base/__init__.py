@@ -8,5 +8,6 @@
 * :mod:`.lifetime`: a child ends with its parent, and gets the stop signals sent to the parent alone;
 * :mod:`.interrupt`: Ctrl-C as a stop request read between steps; pause points for the tests;
 * :mod:`.scratch`: temporary names a later run recognises and removes;
-* :mod:`.terminal`: a stdout its reader may close; :mod:`.numba_cache`: numba's cache folder.
+* :mod:`.terminal`: a stdout its reader may close; :mod:`.numba_cache`: numba's cache folder;
+* :mod:`.threads`: a compiled kernel's loop split over threads.
 """

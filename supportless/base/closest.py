@@ -9,7 +9,9 @@ ten thousand triangles, where building a tree per part costs more than the whole
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .threads import split
 
 __all__ = ["nearest_other_face", "point_triangle_distance2"]
 
@@ -62,12 +64,18 @@ def point_triangle_distance2(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
     return _dot(qx, qy, qz, qx, qy, qz)
 
 
-@njit(cache=True, parallel=True)
 def _nearest(P, group, V, F, face_group):
-    k = P.shape[0]
-    d2 = np.full(k, np.inf)
-    nearest = np.full(k, -1, np.int64)
-    for i in prange(k):
+    """(k,) float64 and (k,) int64: see :func:`nearest_other_face`."""
+    d2 = np.full(len(P), np.inf)
+    nearest = np.full(len(P), -1, np.int64)
+    split(lambda lo, hi, _: _nearest_of(P, group, V, F, face_group, d2, nearest, lo, hi), len(P))
+    return d2, nearest
+
+
+@njit(cache=True, nogil=True)
+def _nearest_of(P, group, V, F, face_group, d2, nearest, lo, hi):
+    """Fill ``d2`` and ``nearest`` at the points ``lo:hi`` (see :func:`nearest_other_face`)."""
+    for i in range(lo, hi):
         px, py, pz = P[i, 0], P[i, 1], P[i, 2]
         best, at = np.inf, -1
         for f in range(F.shape[0]):
@@ -80,7 +88,6 @@ def _nearest(P, group, V, F, face_group):
                 best, at = d, f
         d2[i] = best
         nearest[i] = at
-    return d2, nearest
 
 
 def nearest_other_face(points: np.ndarray, group: np.ndarray, vertices: np.ndarray, faces: np.ndarray,

@@ -22,7 +22,9 @@ the sign the exact test would find. Pairs are found by a hashed grid of boxes, e
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .threads import split
 
 __all__ = ["MAX_ENTRIES_PER_FACE", "possibly_crossing_faces"]
 
@@ -80,34 +82,42 @@ def possibly_crossing_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarr
     return _possibly(V, F, lo, hi, first, last, int(entries))
 
 
-@njit(cache=True, parallel=True)
 def _boxes(V, F):
     """(f, 3) float64 twice: each triangle's lowest and highest coordinates."""
-    f = len(F)
-    lo, hi = np.empty((f, 3)), np.empty((f, 3))
-    for t in prange(f):
+    lo, hi = np.empty((len(F), 3)), np.empty((len(F), 3))
+    split(lambda a, b, _: _boxes_of(V, F, lo, hi, a, b), len(F))
+    return lo, hi
+
+
+@njit(cache=True, nogil=True)
+def _boxes_of(V, F, lo, hi, t_lo, t_hi):
+    """Fill ``lo`` and ``hi`` (f, 3) at the triangles ``t_lo:t_hi``: their lowest and highest coordinates."""
+    for t in range(t_lo, t_hi):
         for d in range(3):
             a, b, c = V[F[t, 0], d], V[F[t, 1], d], V[F[t, 2], d]
             lo[t, d] = min(a, min(b, c))
             hi[t, d] = max(a, max(b, c))
-    return lo, hi
 
 
-@njit(cache=True, parallel=True)
 def _cells(lo, hi, origin, cell):
     """The first and last grid cell of each triangle's box along each axis, (f, 3) int64 twice, and how many
-    cells all the boxes cover."""
+    cells all the boxes cover (a float: up to 2 ** 60 cells a triangle)."""
     f = len(lo)
-    first, last = np.empty((f, 3), np.int64), np.empty((f, 3), np.int64)
-    count = np.empty(f)
-    for t in prange(f):
+    first, last, count = np.empty((f, 3), np.int64), np.empty((f, 3), np.int64), np.empty(f)
+    split(lambda a, b, _: _cells_of(lo, hi, origin, float(cell), first, last, count, a, b), f)
+    return first, last, count.sum()
+
+
+@njit(cache=True, nogil=True)
+def _cells_of(lo, hi, origin, cell, first, last, count, t_lo, t_hi):
+    """Fill ``first``, ``last`` and ``count`` at the triangles ``t_lo:t_hi`` (see :func:`_cells`)."""
+    for t in range(t_lo, t_hi):
         n = 1.0
         for d in range(3):
             first[t, d] = np.int64(np.floor((lo[t, d] - origin[d]) / cell))
             last[t, d] = np.int64(np.floor((hi[t, d] - origin[d]) / cell))
             n *= last[t, d] - first[t, d] + 1
         count[t] = n
-    return first, last, count.sum()  # (a float: up to 2 ** 60 cells a triangle)
 
 
 @njit(cache=True)
@@ -176,7 +186,7 @@ def _apart(V, F, i, j):
     """
     if _one_side(V, F, i, j) or _one_side(V, F, j, i):
         return True
-    shared = 0
+    shared = np.int64(0)  # (not the literal 0: _apart_flat is compiled for one type of count, not two)
     for a in range(3):
         for b in range(3):
             if F[i, a] == F[j, b]:
@@ -291,21 +301,29 @@ def _bucket(key, bits, mask):
     return ((key * 0x5851F42D4C957F2D) >> (64 - bits)) & mask
 
 
-@njit(cache=True, parallel=True)
 def _possibly(V, F, lo, hi, first, last, entries):
+    """(f,) bool: the triangles of some pair in a common grid cell not proven apart (:func:`_apart`)."""
     f = len(F)
     size, bits = 1, 0
     while 2 * size < entries:
         size, bits = 2 * size, bits + 1
-    mask = size - 1
-    # every (cell, triangle) entry, grouped by the cell's hash (a counting sort)
+    counts = np.prod(last - first + 1, axis=1)
     offset = np.zeros(f + 1, np.int64)
-    for t in range(f):
-        offset[t + 1] = offset[t] + (last[t, 0] - first[t, 0] + 1) * (last[t, 1] - first[t, 1] + 1) * (
-            last[t, 2] - first[t, 2] + 1)
+    np.cumsum(counts, out=offset[1:])
     key = np.empty(entries, np.int64)
     owner = np.empty(entries, np.int32)
-    for t in prange(f):
+    split(lambda a, b, _: _entries(first, last, offset, key, owner, a, b), f)
+    start, grouped_key, grouped_owner = _grouped(key, owner, bits, size - 1)
+    possibly = np.zeros(f, np.bool_)
+    split(lambda a, b, _: _pairs(V, F, lo, hi, first, start, grouped_key, grouped_owner, possibly, a, b), size)
+    return possibly
+
+
+@njit(cache=True, nogil=True)
+def _entries(first, last, offset, key, owner, lo, hi):
+    """Every (cell, triangle) entry of the triangles ``lo:hi``: ``key`` (the cell) and ``owner`` (the triangle)
+    from ``offset[t]`` on."""
+    for t in range(lo, hi):
         at = offset[t]
         for x in range(first[t, 0], last[t, 0] + 1):
             for y in range(first[t, 1], last[t, 1] + 1):
@@ -313,11 +331,18 @@ def _possibly(V, F, lo, hi, first, last, entries):
                     key[at] = _key(x, y, z)
                     owner[at] = t
                     at += 1
-    start = np.zeros(size + 1, np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _grouped(key, owner, bits, mask):
+    """The entries grouped by their cell's bucket (a counting sort): each bucket's first entry, ``(mask + 2,)``
+    int64, then the keys and owners in that order."""
+    entries = len(key)
+    start = np.zeros(mask + 2, np.int64)
     for e in range(entries):
         start[_bucket(key[e], bits, mask)] += 1
     total = 0
-    for b in range(size + 1):
+    for b in range(mask + 2):
         total, start[b] = total + start[b], total
     grouped_key = np.empty(entries, np.int64)
     grouped_owner = np.empty(entries, np.int32)
@@ -326,15 +351,20 @@ def _possibly(V, F, lo, hi, first, last, entries):
         b = _bucket(key[e], bits, mask)
         grouped_key[fill[b]], grouped_owner[fill[b]] = key[e], owner[e]
         fill[b] += 1
-    possibly = np.zeros(f, np.bool_)
-    for b in prange(size):
+    return start, grouped_key, grouped_owner
+
+
+@njit(cache=True, nogil=True)
+def _pairs(V, F, lo, hi, first, start, grouped_key, grouped_owner, possibly, b_lo, b_hi):
+    """Mark in ``possibly`` both triangles of each pair of the buckets ``b_lo:b_hi`` not proven apart, each pair
+    once (in the cell of its boxes' common lowest corner)."""
+    for b in range(b_lo, b_hi):
         for p in range(start[b], start[b + 1]):
             i, k = grouped_owner[p], grouped_key[p]
             for q in range(p + 1, start[b + 1]):
                 if grouped_key[q] != k:
                     continue
                 j = grouped_owner[q]
-                # the pair once: in the cell of its boxes' common lowest corner
                 if _key(max(first[i, 0], first[j, 0]), max(first[i, 1], first[j, 1]),
                         max(first[i, 2], first[j, 2])) != k:
                     continue
@@ -344,4 +374,3 @@ def _possibly(V, F, lo, hi, first, last, entries):
                 if not _apart(V, F, i, j):
                     possibly[i] = True
                     possibly[j] = True
-    return possibly

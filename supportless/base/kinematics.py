@@ -23,10 +23,11 @@ follows its parent's motion.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from .chain import chain_transforms3, euler_matrices
 from .skinning import WeightBlocks, skin_blocks, skin_dense, weight_blocks
+from .threads import split
 
 
 def bone_parents(bones: np.ndarray) -> np.ndarray:
@@ -509,12 +510,13 @@ def lbs_operator(vertices: np.ndarray, weights: np.ndarray):
     return M
 
 
-@njit(parallel=True, cache=True)
-def _skin_blocks3(start, bone, coef, T, out):  # pragma: no cover - compiled
+@njit(nogil=True, cache=True)
+def _skin_blocks3(start, bone, coef, T, out, lo, hi):  # pragma: no cover - compiled
     # per vertex, per bone of its row: the 4 coefficients against the bone's 4 rows of T (a planar rig's padded
     # with zeros), three named sums; the same additions in the same order as a loop over the CSR's non-zeros (a missing one adds 0.0), with one
     # index per bone instead of one per non-zero and the bone's rows of T read together
-    for p in prange(T.shape[0]):
+    # (the poses lo:hi)
+    for p in range(lo, hi):
         Tp = T[p]
         for i in range(len(start) - 1):
             x = 0.0
@@ -637,6 +639,7 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
         T4[:, :, : d + 1, :d] = T.reshape(P, m, d + 1, d)
         T = T4.reshape(P, 4 * m, 3)
     out = np.empty((T.shape[0], M.shape[0], 3))
-    _skin_blocks3(*blocks, np.ascontiguousarray(T, np.float64), out)
+    T = np.ascontiguousarray(T, np.float64)
+    split(lambda lo, hi, _: _skin_blocks3(*blocks, T, out, lo, hi), len(T))
     out = out[..., :d] if d < 3 else out
     return out[0] if single else out

@@ -15,7 +15,9 @@ import weakref
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from .threads import split
 
 __all__ = ["BLOCK_CHUNK", "WeightBlocks", "skin_blocks", "skin_dense", "weight_blocks"]
 
@@ -87,10 +89,11 @@ def weight_blocks(vertices: np.ndarray, weights: np.ndarray, chunk: int = BLOCK_
                         np.concatenate(values) if values else empty[1], int(W.shape[1]))
 
 
-@njit(parallel=True, cache=True)
-def _skin_weights3(start, bone, weight, V, T, out):  # pragma: no cover - compiled
-    # as kinematics._skin_blocks3, each block's coefficients w * [x, y, z, 1] formed here (the same products)
-    for p in prange(T.shape[0]):
+@njit(nogil=True, cache=True)
+def _skin_weights3(start, bone, weight, V, T, out, lo, hi):  # pragma: no cover - compiled
+    # as kinematics._skin_blocks3 (the poses lo:hi), each block's coefficients w * [x, y, z, 1] formed here (the
+    # same products)
+    for p in range(lo, hi):
         Tp = T[p]
         for i in range(len(start) - 1):
             x = 0.0
@@ -136,8 +139,9 @@ def skin_blocks(blocks: WeightBlocks, T: np.ndarray) -> np.ndarray:
     vertices : (P, n, 3) float64
     """
     out = np.empty((T.shape[0], len(blocks.vertices), 3))
-    _skin_weights3(blocks.start, blocks.bone, blocks.weight, blocks.vertices, np.ascontiguousarray(T, np.float64),
-                   out)
+    T = np.ascontiguousarray(T, np.float64)
+    split(lambda lo, hi, _: _skin_weights3(blocks.start, blocks.bone, blocks.weight, blocks.vertices, T, out, lo, hi),
+          len(T))
     return out
 
 
@@ -162,7 +166,7 @@ def skin_dense(M: np.ndarray, T: np.ndarray) -> np.ndarray:
     MT = _transposed(M)
     T = np.ascontiguousarray(T, np.float64)
     out = np.empty((T.shape[0], MT.shape[1], 3))
-    _skin_dense3(MT, T, out)
+    split(lambda lo, hi, _: _skin_dense3(MT, T, out, lo, hi), len(T))
     return out
 
 
@@ -185,11 +189,12 @@ def _transposed(M: np.ndarray) -> np.ndarray:
     return MT
 
 
-@njit(parallel=True, cache=True, fastmath={"contract"})
-def _skin_dense3(MT, T, out):  # pragma: no cover - compiled
-    P, k = T.shape[0], T.shape[1]
+@njit(nogil=True, cache=True, fastmath={"contract"})
+def _skin_dense3(MT, T, out, lo, hi):  # pragma: no cover - compiled
+    # the poses lo:hi
+    k = T.shape[1]
     n = MT.shape[1]
-    for p in prange(P):
+    for p in range(lo, hi):
         x, y, z = np.zeros(n), np.zeros(n), np.zeros(n)
         for r in range(k):
             tx, ty, tz = T[p, r, 0], T[p, r, 1], T[p, r, 2]

@@ -9,7 +9,9 @@ ray centres row by row), with the same exact, tie-broken inside test (:mod:`._gr
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..base.threads import split
 
 from ._grid_common import ENTERING, LEAVING, RISKY, grid_layout, inside_triangle, triangle_edges
 
@@ -24,9 +26,10 @@ def _pixel_range(lo, hi, origin, cell, n):
     return first, last
 
 
-@njit(cache=True, parallel=True)
-def _count(X, F, cell, nx, ny, u0, w0, counts):
-    for f in prange(F.shape[0]):
+@njit(cache=True, nogil=True)
+def _count(X, F, cell, nx, ny, u0, w0, counts, lo, hi):
+    # counts[f]: the ray centres inside triangle f, for the triangles lo:hi
+    for f in range(lo, hi):
         a, b, c = F[f, 0], F[f, 1], F[f, 2]
         ax, ay, bx, by, cx, cy = X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1]
         nz = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
@@ -45,9 +48,10 @@ def _count(X, F, cell, nx, ny, u0, w0, counts):
         counts[f] = k
 
 
-@njit(cache=True, parallel=True)
-def _fill(X, F, orient, tau, cell, nx, ny, u0, w0, start, pix, z, code):
-    for f in prange(F.shape[0]):
+@njit(cache=True, nogil=True)
+def _fill(X, F, orient, tau, cell, nx, ny, u0, w0, start, pix, z, code, lo, hi):
+    # the crossings of the triangles lo:hi, from start[f] on
+    for f in range(lo, hi):
         if start[f + 1] == start[f]:
             continue
         a, b, c = F[f, 0], F[f, 1], F[f, 2]
@@ -112,8 +116,9 @@ def crossings3(X: np.ndarray, F: np.ndarray, orient: float, R: int, tau: float):
     if nx == 0 or len(F) == 0:
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8), (cell, nx, ny, u0, w0)
     counts = np.empty(len(F), np.int64)
-    _count(X, F, cell, nx, ny, u0, w0, counts)
+    split(lambda lo, hi, _: _count(X, F, cell, nx, ny, u0, w0, counts, lo, hi), len(F))
     start = np.concatenate([[0], np.cumsum(counts)])
     pix, z, code = np.empty(start[-1], np.int64), np.empty(start[-1]), np.empty(start[-1], np.int8)
-    _fill(X, F, float(orient), float(tau), cell, nx, ny, u0, w0, start, pix, z, code)
+    orient, tau = float(orient), float(tau)
+    split(lambda lo, hi, _: _fill(X, F, orient, tau, cell, nx, ny, u0, w0, start, pix, z, code, lo, hi), len(F))
     return pix, z, code, (cell, nx, ny, u0, w0)

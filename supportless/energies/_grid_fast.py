@@ -5,8 +5,9 @@ It finds exactly the crossings of the reference kernel
 (:func:`._grid_common.sweep_rays`), so the results are bit-identical; it is
 faster because
 
-* the batch runs in one parallel call that computes each pose's orientation
-  and frame coordinates itself, into per-thread buffers allocated once;
+* the batch runs in one call per thread (:func:`supportless.base.threads.split`)
+  that computes each pose's orientation and frame coordinates itself, into
+  per-thread buffers allocated once;
 * every triangle scans the ray centres of its bounding box in one flat loop
   with incremental floating-point edge functions: centres surely inside are
   kept, surely outside dropped, and the few within ``_SPAN_EPS`` cells of an
@@ -21,10 +22,10 @@ A pose whose crossings overflow the buffers is recomputed by the reference kerne
 
 from __future__ import annotations
 
-import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
+from ..base import threads
 from . import _grid_reference
 from ._grid_common import (
     ENTERING,
@@ -189,8 +190,8 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
     ucap = ubuf.shape[0]
     for q in range(npix):
         cnt[q] = 0
-    m = 0
-    nu = 0
+    m = np.int64(0)  # (not the literal 0: the callees below are compiled for one type of count, not two)
+    nu = np.int64(0)
     two_pass = not support
     for pss in range(2 if two_pass else 1):
         if pss == 1:
@@ -293,9 +294,9 @@ def _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, 
     return inter * area, sup * area, True
 
 
-@njit(cache=True, parallel=True)
-def _grid3_fast(V, F, Rm, R, tau, support, xbuf, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat):
-    """:func:`_pose3_fast` over a batch, parallel over poses.
+@njit(cache=True, nogil=True)
+def _grid3_fast(V, F, Rm, R, tau, support, X, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat, lo, hi, out, ok):
+    """:func:`_pose3_fast` over the poses ``lo:hi`` of a batch (one thread's range of :func:`.threads.split`).
 
     Each pose's orientation and frame coordinates are computed here, bit for
     bit as :func:`.surface.orientation_sign` and :func:`.surface.to_frame`.
@@ -310,36 +311,28 @@ def _grid3_fast(V, F, Rm, R, tau, support, xbuf, pix, zz, cc, cnt, start, zs, cs
         The frame of ``up`` (:func:`.surface.frame_matrix`).
     R, tau, support
         As :func:`_pose3_fast`.
-    xbuf : (threads, n, 3) float64
-        Frame coordinates.
-    pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat : (threads, ...)
-        The buffers of :func:`_pose3_fast`, one row per thread.
-
-    Returns
-    -------
+    X : (n, 3) float64
+        Scratch: frame coordinates.
+    pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat
+        The scratch buffers of :func:`_pose3_fast` (this thread's).
+    lo, hi : int
+        The poses computed here.
     out : (P, 2) float64
-        Self-intersection and support column volume per pose.
+        Filled at ``lo:hi``: self-intersection and support column volume per pose.
     ok : (P,) bool
-        False for the poses whose crossings did not fit in the buffers.
+        Filled at ``lo:hi``: False for the poses whose crossings did not fit in the buffers.
     """
-    P = V.shape[0]
     n = V.shape[1]
-    out = np.zeros((P, 2), np.float64)
-    ok = np.ones(P, np.bool_)
-    for p in prange(P):
-        t = numba.get_thread_id()
+    for p in range(lo, hi):
         Y = V[p]
         orient = -1.0 if signed_volume3(Y, F) < 0.0 else 1.0
-        X = xbuf[t]
         for i in range(n):
             for a in range(3):
                 X[i, a] = Y[i, 0] * Rm[a, 0] + Y[i, 1] * Rm[a, 1] + Y[i, 2] * Rm[a, 2]
-        r0, r1, good = _pose3_fast(X[:n], F, orient, R, tau, support, pix[t], zz[t], cc[t], cnt[t], start[t],
-                                   zs[t], cs[t], ubuf[t], ufac[t], sat[t])
+        r0, r1, good = _pose3_fast(X, F, orient, R, tau, support, pix, zz, cc, cnt, start, zs, cs, ubuf, ufac, sat)
         out[p, 0] = r0
         out[p, 1] = r1
         ok[p] = good
-    return out, ok
 
 
 def ray_grid3_fast(V, F, up, R, tau, support):
@@ -366,22 +359,25 @@ def ray_grid3_fast(V, F, up, R, tau, support):
         As :func:`supportless.energies.raygrid.ray_grid`; poses overflowing
         the buffers come from :func:`._grid_reference.grid_batch`.
     """
-    threads = numba.config.NUMBA_NUM_THREADS
+    rows = min(threads.thread_count(), max(len(V), 1))
     npix = R * R
     cap = _CROSSINGS_PER_PIXEL * npix + 1024
-    xbuf = np.empty((threads, V.shape[1], 3), np.float64)
-    pix = np.empty((threads, cap), np.int32)
-    zz = np.empty((threads, cap), np.float64)
-    cc = np.empty((threads, cap), np.int8)
-    zs = np.empty((threads, cap), np.float64)
-    cs = np.empty((threads, cap), np.int8)
-    cnt = np.empty((threads, npix), np.int32)
-    start = np.empty((threads, npix), np.int64)
-    ubuf = np.empty((threads, npix), np.int64)
-    ufac = np.empty((threads, npix), np.int64)
-    sat = np.empty((threads, (R + 1) * (R + 1)), np.int32)
-    out, ok = _grid3_fast(V, F, frame_matrix(up), R, float(tau), bool(support), xbuf, pix, zz, cc, cnt, start, zs,
-                          cs, ubuf, ufac, sat)
+    xbuf = np.empty((rows, V.shape[1], 3), np.float64)
+    pix = np.empty((rows, cap), np.int32)
+    zz = np.empty((rows, cap), np.float64)
+    cc = np.empty((rows, cap), np.int8)
+    zs = np.empty((rows, cap), np.float64)
+    cs = np.empty((rows, cap), np.int8)
+    cnt = np.empty((rows, npix), np.int32)
+    start = np.empty((rows, npix), np.int64)
+    ubuf = np.empty((rows, npix), np.int64)
+    ufac = np.empty((rows, npix), np.int64)
+    sat = np.empty((rows, (R + 1) * (R + 1)), np.int32)
+    out, ok = np.zeros((len(V), 2), np.float64), np.ones(len(V), np.bool_)
+    Rm, R, tau, support = frame_matrix(up), int(R), float(tau), bool(support)
+    threads.split(lambda lo, hi, t: _grid3_fast(V, F, Rm, R, tau, support, xbuf[t], pix[t], zz[t], cc[t], cnt[t],
+                                                start[t], zs[t], cs[t], ubuf[t], ufac[t], sat[t], lo, hi, out, ok),
+                  len(V), rows)
     if not ok.all():
         bad = np.flatnonzero(~ok)
         Vb = np.ascontiguousarray(V[bad])

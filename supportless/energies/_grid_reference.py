@@ -11,7 +11,9 @@ grid always runs here; the 3D one serves as the fallback of the fast kernel
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..base.threads import split
 
 from ._grid_common import (
     face_normal,
@@ -252,28 +254,29 @@ def grid_batch(X, S, orient, R, tau):
         dimension it serves (a 2D figure's first run does not compile the 3D
         rasteriser).
     """
-    return (_batch3 if X.shape[2] == 3 else _batch2)(X, S, orient, R, tau)
+    return _batch(_batch3 if X.shape[2] == 3 else _batch2, X, S, orient, R, tau)
 
 
-@njit(cache=True, parallel=True)
-def _batch3(X, S, orient, R, tau):
-    """:func:`grid_batch` of 3D poses."""
-    P = X.shape[0]
-    out = np.zeros((P, 2), np.float64)
-    for p in prange(P):
+def _batch(kernel, X, S, orient, R, tau):
+    """``kernel`` (:func:`_batch3` or :func:`_batch2`) over the poses of ``X``, split over threads."""
+    out = np.zeros((X.shape[0], 2), np.float64)
+    split(lambda lo, hi, _: kernel(X, S, orient, int(R), float(tau), out, lo, hi), X.shape[0])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _batch3(X, S, orient, R, tau, out, lo, hi):
+    """:func:`grid_batch` of the 3D poses ``lo:hi``, into ``out`` (P, 2)."""
+    for p in range(lo, hi):
         a, b = _pose3(X[p], S, orient[p], R, tau)
         out[p, 0] = a
         out[p, 1] = b
-    return out
 
 
-@njit(cache=True, parallel=True)
-def _batch2(X, S, orient, R, tau):
-    """:func:`grid_batch` of 2D poses."""
-    P = X.shape[0]
-    out = np.zeros((P, 2), np.float64)
-    for p in prange(P):
+@njit(cache=True, nogil=True)
+def _batch2(X, S, orient, R, tau, out, lo, hi):
+    """:func:`grid_batch` of the 2D poses ``lo:hi``, into ``out`` (P, 2)."""
+    for p in range(lo, hi):
         a, b = _pose2(X[p], S, orient[p], R, tau)
         out[p, 0] = a
         out[p, 1] = b
-    return out

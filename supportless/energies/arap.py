@@ -41,9 +41,11 @@ from dataclasses import dataclass
 import igl
 import numpy as np
 import scipy.sparse as sp
-from numba import njit, prange
+from numba import njit
 from scipy.cluster.vq import kmeans2
 from scipy.spatial.distance import cdist
+
+from ..base.threads import split
 
 __all__ = [
     "ArapData",
@@ -398,17 +400,22 @@ def _rotation_term(S, g, d):
     return x
 
 
-@njit(cache=True, parallel=True)
 def _rotation_terms(S):
     """Sum over clusters of :func:`_rotation_term`; ``S`` is (P, d, g, d) (block ``g`` of pose ``p``: ``S[p, :, g]``)."""
-    P, g, d = S.shape[0], S.shape[2], S.shape[1]
-    out = np.zeros(P)
-    for p in prange(P):
+    out = np.zeros(S.shape[0])
+    split(lambda lo, hi, _: _rotation_terms_of(S, out, lo, hi), S.shape[0])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _rotation_terms_of(S, out, lo, hi):
+    """Fill ``out`` (P,) at the poses ``lo:hi`` (see :func:`_rotation_terms`)."""
+    g, d = S.shape[2], S.shape[1]
+    for p in range(lo, hi):
         t = 0.0
         for k in range(g):
             t += _rotation_term(S[p], k, d)
         out[p] = t
-    return out
 
 
 def arap_energy(data: ArapData, transforms, backend="fast"):

@@ -15,7 +15,9 @@ above), is an edge of those polygons run counter-clockwise; the polygons' area i
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+
+from ..base.threads import split
 
 __all__ = ["FIRST_LAYER_MM", "footprint_area", "section_area"]
 
@@ -53,16 +55,22 @@ def section_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, above:
     return float(area[0]) if single else area
 
 
-@njit(cache=True, parallel=True)
 def _sections(V, F, U, above):
-    """(P,) float64: :func:`section_area` of ``V`` (P, n, 3) along ``U`` (P, 3) unit at ``above`` (P,).
+    """(P,) float64: :func:`section_area` of ``V`` (P, n, 3) along ``U`` (P, 3) unit at ``above`` (P,)."""
+    out = np.zeros(len(V))
+    split(lambda lo, hi, _: _sections_of(V, F, U, above, out, lo, hi), len(V))
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _sections_of(V, F, U, above, out, lo, hi):
+    """Fill ``out`` (P,) at the poses ``lo:hi`` (see :func:`_sections`).
 
     Each cut face adds ``1/2 sign (p x q) . u`` for the segment ``pq`` where the plane cuts it, ``sign`` turning the
     segment so that the face's outward normal is on its right seen from above (counter-clockwise round the section).
     """
-    P, n = V.shape[0], V.shape[1]
-    out = np.zeros(P)
-    for p in prange(P):
+    n = V.shape[1]
+    for p in range(lo, hi):
         ux, uy, uz = U[p, 0], U[p, 1], U[p, 2]
         h = np.empty(n)
         low = np.inf
@@ -99,7 +107,6 @@ def _sections(V, F, U, above):
             cross_u = (fy * sz - fz * sy) * ux + (fz * sx - fx * sz) * uy + (fx * sy - fy * sx) * uz
             area += 0.5 * sign * cross_u
         out[p] = max(area, 0.0)
-    return out
 
 
 def footprint_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, mm_per_unit: float | np.ndarray,

@@ -24,15 +24,15 @@ or signed area (2D) of each pose, so either consistent winding works.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
+from ..base.threads import split
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area"]
 
 
-@njit(cache=True, parallel=True)
 def _kernel3(V, F, up, orient, tau, mask, floor):
     """Energy and risky area per pose (3D).
 
@@ -40,9 +40,15 @@ def _kernel3(V, F, up, orient, tau, mask, floor):
     unit, one per pose, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
     bool with the risky faces and returns (P, 2) float64 [energy, risky area].
     """
-    P = V.shape[0]
-    out = np.zeros((P, 2), np.float64)
-    for p in prange(P):
+    out = np.zeros((V.shape[0], 2), np.float64)
+    split(lambda lo, hi, _: _kernel3_poses(V, F, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _kernel3_poses(V, F, up, orient, tau, mask, floor, out, lo, hi):
+    """:func:`_kernel3` at the poses ``lo:hi``, into ``out`` (P, 2)."""
+    for p in range(lo, hi):
         ux, uy, uz = up[p, 0], up[p, 1], up[p, 2]
         X = V[p]
         plate = np.inf
@@ -78,10 +84,8 @@ def _kernel3(V, F, up, orient, tau, mask, floor):
             mask[p, f] = risky
         out[p, 0] = e
         out[p, 1] = ra
-    return out
 
 
-@njit(cache=True, parallel=True)
 def _kernel2(V, E, up, orient, tau, mask, floor):
     """Energy and risky length per pose (2D).
 
@@ -90,9 +94,15 @@ def _kernel2(V, E, up, orient, tau, mask, floor):
     (P,) float64; fills ``mask`` (P, e) bool with the risky edges and returns
     (P, 2) float64 [energy, risky length].
     """
-    P = V.shape[0]
-    out = np.zeros((P, 2), np.float64)
-    for p in prange(P):
+    out = np.zeros((V.shape[0], 2), np.float64)
+    split(lambda lo, hi, _: _kernel2_poses(V, E, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _kernel2_poses(V, E, up, orient, tau, mask, floor, out, lo, hi):
+    """:func:`_kernel2` at the poses ``lo:hi``, into ``out`` (P, 2)."""
+    for p in range(lo, hi):
         ux, uy = up[p, 0], up[p, 1]
         X = V[p]
         plate = np.inf
@@ -118,7 +128,6 @@ def _kernel2(V, E, up, orient, tau, mask, floor):
             mask[p, k] = risky
         out[p, 0] = e
         out[p, 1] = rl
-    return out
 
 
 def _numpy(V, F, u, orient, tau, floor=0.0):

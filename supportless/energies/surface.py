@@ -13,9 +13,10 @@ last axis is ``up`` (:func:`plane_basis`, :func:`to_frame`).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..base.geometry import parse_up, plane_basis
+from ..base.threads import split
 
 __all__ = [
     "BACKENDS",
@@ -146,17 +147,21 @@ def signed_area2(X, F):
     return 0.5 * t
 
 
-@njit(cache=True, parallel=True)
 def _signed_measure(V, F):
     """(P,) float64: :func:`signed_volume3` or :func:`signed_area2` of each pose of ``V`` (P, n, d)."""
-    P = V.shape[0]
-    out = np.zeros(P, np.float64)
-    for p in prange(P):
+    out = np.zeros(V.shape[0], np.float64)
+    split(lambda lo, hi, _: _signed_measure_of(V, F, out, lo, hi), V.shape[0])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _signed_measure_of(V, F, out, lo, hi):
+    """Fill ``out`` (P,) at the poses ``lo:hi`` (see :func:`_signed_measure`)."""
+    for p in range(lo, hi):
         if V.shape[2] == 3:
             out[p] = signed_volume3(V[p], F)
         else:
             out[p] = signed_area2(V[p], F)
-    return out
 
 
 def orientation_sign(V, F, backend="fast"):

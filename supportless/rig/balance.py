@@ -19,9 +19,10 @@ In 2D the support polygon is an interval on the plate line.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from ..base.geometry import plane_basis
+from ..base.threads import split
 
 __all__ = ["centre_of_mass", "centre_of_mass_operator", "new_contact_depth", "stability_margin",
            "support_polygon"]
@@ -190,15 +191,19 @@ def new_contact_depth(vertices: np.ndarray, up: np.ndarray, clear: np.ndarray, l
     return float(out) if np.ndim(out) == 0 else out
 
 
-@njit(cache=True, parallel=True)
-def _lowest(V, index, up):  # pragma: no cover - compiled
-    # (P,) float64: the least height along up of the vertices ``index`` of each pose (the same products and sums
-    # as ``V @ up``: x u0 + y u1 + z u2)
+def _lowest(V, index, up):
+    """(P,) float64: the least height along ``up`` of the vertices ``index`` of each pose of ``V`` (P, n, 3)."""
     out = np.empty(V.shape[0])
-    for p in prange(V.shape[0]):
+    split(lambda lo, hi, _: _lowest_of(V, index, up, out, lo, hi), V.shape[0])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _lowest_of(V, index, up, out, lo, hi):  # pragma: no cover - compiled
+    # fill out at the poses lo:hi (the same products and sums as ``V @ up``: x u0 + y u1 + z u2)
+    for p in range(lo, hi):
         low = np.inf
         for k in range(index.shape[0]):
             i = index[k]
             low = min(low, V[p, i, 0] * up[0] + V[p, i, 1] * up[1] + V[p, i, 2] * up[2])
         out[p] = low
-    return out

@@ -45,22 +45,27 @@ def test_every_listed_kernel_is_a_cached_numba_kernel_with_its_arity():
 _RUN = textwrap.dedent("""
     import json, sys, tempfile
     import supportless as sl
-    from numba.core.registry import CPUDispatcher
+    from numba.core.dispatcher import Dispatcher
     from supportless.apps import warmup
     from supportless.search.settings import SearchSettings
 
+    called = set()  # the kernels called from Python (a kernel's callees are compiled into it, not called)
+    compile_for_args = Dispatcher._compile_for_args
+
+    def recording(self, *args, **kws):
+        if self.py_func.__module__.startswith("supportless."):
+            types = tuple(self.typeof_pyval(a) for a in args)
+            called.add((f"{self.py_func.__module__}.{self.py_func.__name__}", str(types)))
+        return compile_for_args(self, *args, **kws)
+
+    Dispatcher._compile_for_args = recording
     cache = tempfile.mkdtemp()
     for source in sys.argv[1:]:
         rig = sl.load_rig(source, cache_dir=cache, **({"up": "y"} if source.startswith("demo:") else {}))
         result = sl.optimize(rig, SearchSettings(particles=8, iterations=3, seed=0))
         rig.self_intersects(result.angles)
     listed = {(k.label, str(warmup._argument_types(k))) for k in warmup.KERNELS}
-    called = set()
-    for name, module in list(sys.modules.items()):
-        if name.startswith("supportless.") and not name.startswith("supportless.shapes"):
-            for attr, value in vars(module).items():
-                if isinstance(value, CPUDispatcher) and value.py_func.__module__ == name:
-                    called |= {(f"{name}.{attr}", str(tuple(sig))) for sig in value.signatures}
+    called = {(label, types) for label, types in called if not label.startswith("supportless.shapes")}
     print(json.dumps({"unlisted": sorted(called - listed), "uncalled": sorted(listed - called)}))
 """)
 
