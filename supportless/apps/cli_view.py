@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .cli_common import _fail, _load, _say_frame, rig_options
+from .cli_common import _fail, _load, _say_frame, rig_options, start_warm_up
 
 __all__ = ["view"]
 
@@ -36,6 +36,10 @@ def view(model, skeleton, up, tets, weights, height_mm, keep_units, no_cache, ca
     if demo_figure:
         model = "demo:tpose"
     rig = frame = None
+    warming = start_warm_up()  # a helper compiles the kernels while the page is used; it ends with the app
+    if warming.helper is not None:
+        click.echo("  compiling the numerical kernels in the background: a first run only (edits are slower until "
+                   "it ends, in about 30 s)", err=True)
     if model is not None:
         rig, frame = _load(model, skeleton, up, tets, weights, no_cache, cache_dir, height_mm=height_mm,
                            keep_units=keep_units, bones=bones, skeleton_out=skeleton_out)

@@ -36,6 +36,9 @@ __all__ = ["HELPER_TIMEOUT_S", "KERNELS", "Kernel", "WarmUp", "claim", "cold_ker
 #: it is stopped and each kernel it did not compile is compiled where it is first called.
 HELPER_TIMEOUT_S = 600.0
 
+#: The environment variable that gives the helper its parent's pid (it ends when that process ends).
+_PARENT = "SUPPORTLESS_WARMUP_PARENT"
+
 
 @dataclass(frozen=True)
 class Kernel:
@@ -216,7 +219,8 @@ def start(kernels=KERNELS) -> WarmUp:
     claims = Path(tempfile.mkdtemp(prefix="supportless-warmup-"))
     try:
         process = subprocess.Popen([sys.executable, "-m", __name__, str(claims), *(k.label for k in cold)],
-                                   stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                   stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                   env=dict(os.environ, **{_PARENT: str(os.getpid())}))
     except OSError:
         return WarmUp(cold=cold, claims=claims)
     warming = WarmUp(cold=cold, claims=claims, helper=process)
@@ -225,7 +229,13 @@ def start(kernels=KERNELS) -> WarmUp:
 
 
 def _main(claims: str, labels: list[str]) -> int:
-    """The helper: compile the kernels named ``module.name`` that the run has not claimed in ``claims``."""
+    """The helper: compile the kernels named ``module.name`` that the run has not claimed in ``claims``; it ends
+    with the run (killed mid-kernel, it leaves no cache file half-written: numba writes each under another name
+    first)."""
+    from ..base.lifetime import end_with_parent
+
+    parent = os.environ.get(_PARENT, "")
+    end_with_parent(int(parent) if parent.isdigit() else None)
     by_label = {k.label: k for k in KERNELS}
     compile_claimed([by_label[label] for label in labels if label in by_label], Path(claims))
     return 0

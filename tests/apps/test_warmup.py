@@ -12,9 +12,11 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 
 import numba
 import pytest
+from processes import gone, linux_only
 
 from supportless.apps import warmup
 from supportless.apps.warmup import KERNELS, Kernel
@@ -113,3 +115,45 @@ def test_the_helper_and_a_warm_up_leave_their_kernels_in_the_cache(tmp_path):
     assert found == {"cold": len(KERNELS), "helper": {"claimed": [first.label], "cold": 0, "here": 0},
                      "whole": {"started": True, "cold": 0, "claims_left": False, "helper_left": False},
                      "again": False}
+
+
+@linux_only
+def test_the_helper_ends_with_the_run_that_started_it(tmp_path):
+    """A run killed outright (``kill -9``) leaves no helper compiling for it."""
+    if (os.cpu_count() or 1) < 2:
+        pytest.skip("one core: no helper is started")
+    script = textwrap.dedent("""
+        import os, signal
+        from supportless.apps import warmup
+        warming = warmup.start()
+        print(warming.helper.pid, flush=True)
+        os.kill(os.getpid(), signal.SIGKILL)
+    """)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))  # every kernel cold: the helper has work
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
+    helper = int(out.stdout.split()[0])
+    deadline = time.monotonic() + 10  # (compiling every kernel takes the helper about 30 s)
+    while not gone(helper) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert gone(helper)
+
+
+def test_view_starts_the_warm_up_in_the_background_and_says_so(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from supportless.apps import cli_view
+    from supportless.apps.cli import main
+    from supportless.apps.ui import app
+
+    class Started:
+        helper = object()
+
+        def finish(self):
+            pytest.fail("the page does not wait for the kernels")
+
+    opened = []
+    monkeypatch.setattr(cli_view, "start_warm_up", lambda: Started())
+    monkeypatch.setattr(app, "run_app", lambda rig, **kw: opened.append(rig))
+    result = CliRunner().invoke(main, ["view", "--workdir", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert opened == [None] and "compiling the numerical kernels in the background" in result.output
