@@ -33,21 +33,22 @@ from .surface import boundary_edges, check_backend, orientation_sign, prepare
 __all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area"]
 
 
-def _kernel3(V, F, up, orient, tau, mask, floor):
-    """Energy and risky area per pose (3D).
-
-    ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (P, 3) float64
-    unit, one per pose, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
-    bool with the risky faces and returns (P, 2) float64 [energy, risky area].
-    """
+def _per_pose(kernel, V, S, up, orient, tau, mask, floor):
+    """``kernel`` (:func:`_kernel3_poses` or :func:`_kernel2_poses`) over every pose of ``V``, split over threads:
+    (P, 2) float64."""
     out = np.zeros((V.shape[0], 2), np.float64)
-    split(lambda lo, hi, _: _kernel3_poses(V, F, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
+    split(lambda lo, hi, _: kernel(V, S, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
     return out
 
 
 @njit(cache=True, nogil=True)
 def _kernel3_poses(V, F, up, orient, tau, mask, floor, out, lo, hi):
-    """:func:`_kernel3` at the poses ``lo:hi``, into ``out`` (P, 2)."""
+    """Energy and risky area of the poses ``lo:hi`` (3D).
+
+    ``V`` (P, n, 3) float64 poses, ``F`` (f, 3) int64, ``up`` (P, 3) float64
+    unit, one per pose, ``orient`` (P,) float64 orientation signs; fills ``mask`` (P, f)
+    bool with the risky faces and ``out`` (P, 2) float64 with [energy, risky area].
+    """
     for p in range(lo, hi):
         ux, uy, uz = up[p, 0], up[p, 1], up[p, 2]
         X = V[p]
@@ -86,22 +87,15 @@ def _kernel3_poses(V, F, up, orient, tau, mask, floor, out, lo, hi):
         out[p, 1] = ra
 
 
-def _kernel2(V, E, up, orient, tau, mask, floor):
-    """Energy and risky length per pose (2D).
+@njit(cache=True, nogil=True)
+def _kernel2_poses(V, E, up, orient, tau, mask, floor, out, lo, hi):
+    """Energy and risky length of the poses ``lo:hi`` (2D).
 
     ``V`` (P, n, 2) float64 poses, ``E`` (e, 2) int64 boundary edges
     (:func:`.surface.boundary_edges`), ``up`` (P, 2) float64 unit, one per pose, ``orient``
-    (P,) float64; fills ``mask`` (P, e) bool with the risky edges and returns
-    (P, 2) float64 [energy, risky length].
+    (P,) float64; fills ``mask`` (P, e) bool with the risky edges and ``out`` (P, 2) float64 with
+    [energy, risky length].
     """
-    out = np.zeros((V.shape[0], 2), np.float64)
-    split(lambda lo, hi, _: _kernel2_poses(V, E, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
-    return out
-
-
-@njit(cache=True, nogil=True)
-def _kernel2_poses(V, E, up, orient, tau, mask, floor, out, lo, hi):
-    """:func:`_kernel2` at the poses ``lo:hi``, into ``out`` (P, 2)."""
     for p in range(lo, hi):
         ux, uy = up[p, 0], up[p, 1]
         X = V[p]
@@ -133,7 +127,7 @@ def _kernel2_poses(V, E, up, orient, tau, mask, floor, out, lo, hi):
 def _numpy(V, F, u, orient, tau, floor=0.0):
     """Plain numpy version of the kernels, poses in chunks of bounded memory.
 
-    Same arguments as :func:`_kernel3` (faces ``F``; boundary edges taken
+    Same arguments as :func:`_kernel3_poses` (faces ``F``; boundary edges taken
     here in 2D); returns ((P, 2) float64 [energy, risky measure], (P, m) bool mask).
     """
     P = V.shape[0]
@@ -197,11 +191,11 @@ def _compute(vertices, faces, up, overhang_angle, backend="fast", floor=0.0, ori
     U = np.broadcast_to(u, (V.shape[0], V.shape[-1])).copy()  # writable, like every caller's: one compiled kernel
     if V.shape[-1] == 3:
         mask = np.zeros((V.shape[0], F.shape[0]), np.bool_)
-        out = _kernel3(V, F, U, orient, tau, mask, float(floor))
+        out = _per_pose(_kernel3_poses, V, F, U, orient, tau, mask, floor)
     else:
         E = boundary_edges(F)
         mask = np.zeros((V.shape[0], E.shape[0]), np.bool_)
-        out = _kernel2(V, E, U, orient, tau, mask, float(floor))
+        out = _per_pose(_kernel2_poses, V, E, U, orient, tau, mask, floor)
     return out, mask, single
 
 
