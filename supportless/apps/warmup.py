@@ -2,7 +2,7 @@
 
 numba compiles a kernel the first time it is called and keeps it in its cache (``cache=True``). A run after
 install therefore spends much of its time compiling, one kernel after another on one core: the kernels of a
-search take 28 s (they took 51 s while numba built their loops' parallel versions; they are now serial, split
+search take 26–32 s (56–58 s while numba built their loops' parallel versions; they are now serial, split
 over threads by :mod:`supportless.base.threads`), against 11 s for the whole of a warm ``supportless demo``.
 :func:`start` starts a
 helper process that compiles the kernels a search uses (:data:`KERNELS`), largest first, into the same cache

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .threads import split
+from .threads import over
 
 __all__ = ["nearest_other_face", "point_triangle_distance2"]
 
@@ -68,7 +68,7 @@ def _nearest(P, group, V, F, face_group):
     """(k,) float64 and (k,) int64: see :func:`nearest_other_face`."""
     d2 = np.full(len(P), np.inf)
     nearest = np.full(len(P), -1, np.int64)
-    split(lambda lo, hi, _: _nearest_of(P, group, V, F, face_group, d2, nearest, lo, hi), len(P))
+    over(_nearest_of, len(P), P, group, V, F, face_group, d2, nearest)
     return d2, nearest
 
 

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .threads import split
+from .threads import over
 
 __all__ = ["MAX_ENTRIES_PER_FACE", "possibly_crossing_faces"]
 
@@ -85,7 +85,7 @@ def possibly_crossing_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarr
 def _boxes(V, F):
     """(f, 3) float64 twice: each triangle's lowest and highest coordinates."""
     lo, hi = np.empty((len(F), 3)), np.empty((len(F), 3))
-    split(lambda a, b, _: _boxes_of(V, F, lo, hi, a, b), len(F))
+    over(_boxes_of, len(F), V, F, lo, hi)
     return lo, hi
 
 
@@ -104,7 +104,7 @@ def _cells(lo, hi, origin, cell):
     cells all the boxes cover (a float: up to 2 ** 60 cells a triangle)."""
     f = len(lo)
     first, last, count = np.empty((f, 3), np.int64), np.empty((f, 3), np.int64), np.empty(f)
-    split(lambda a, b, _: _cells_of(lo, hi, origin, float(cell), first, last, count, a, b), f)
+    over(_cells_of, f, lo, hi, origin, float(cell), first, last, count)
     return first, last, count.sum()
 
 
@@ -312,10 +312,10 @@ def _possibly(V, F, lo, hi, first, last, entries):
     np.cumsum(counts, out=offset[1:])
     key = np.empty(entries, np.int64)
     owner = np.empty(entries, np.int32)
-    split(lambda a, b, _: _entries(first, last, offset, key, owner, a, b), f)
+    over(_entries, f, first, last, offset, key, owner)
     start, grouped_key, grouped_owner = _grouped(key, owner, bits, size - 1)
     possibly = np.zeros(f, np.bool_)
-    split(lambda a, b, _: _pairs(V, F, lo, hi, first, start, grouped_key, grouped_owner, possibly, a, b), size)
+    over(_pairs, size, V, F, lo, hi, first, start, grouped_key, grouped_owner, possibly)
     return possibly
 
 

@@ -27,7 +27,7 @@ from numba import njit
 
 from .chain import chain_transforms3, euler_matrices
 from .skinning import WeightBlocks, skin_blocks, skin_dense, weight_blocks
-from .threads import split
+from .threads import over
 
 
 def bone_parents(bones: np.ndarray) -> np.ndarray:
@@ -640,6 +640,6 @@ def skin(M, transforms: np.ndarray) -> np.ndarray:
         T = T4.reshape(P, 4 * m, 3)
     out = np.empty((T.shape[0], M.shape[0], 3))
     T = np.ascontiguousarray(T, np.float64)
-    split(lambda lo, hi, _: _skin_blocks3(*blocks, T, out, lo, hi), len(T))
+    over(_skin_blocks3, len(T), *blocks, T, out)
     out = out[..., :d] if d < 3 else out
     return out[0] if single else out

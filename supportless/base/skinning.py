@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from .threads import split
+from .threads import over
 
 __all__ = ["BLOCK_CHUNK", "WeightBlocks", "skin_blocks", "skin_dense", "weight_blocks"]
 
@@ -140,8 +140,7 @@ def skin_blocks(blocks: WeightBlocks, T: np.ndarray) -> np.ndarray:
     """
     out = np.empty((T.shape[0], len(blocks.vertices), 3))
     T = np.ascontiguousarray(T, np.float64)
-    split(lambda lo, hi, _: _skin_weights3(blocks.start, blocks.bone, blocks.weight, blocks.vertices, T, out, lo, hi),
-          len(T))
+    over(_skin_weights3, len(T), blocks.start, blocks.bone, blocks.weight, blocks.vertices, T, out)
     return out
 
 
@@ -166,7 +165,7 @@ def skin_dense(M: np.ndarray, T: np.ndarray) -> np.ndarray:
     MT = _transposed(M)
     T = np.ascontiguousarray(T, np.float64)
     out = np.empty((T.shape[0], MT.shape[1], 3))
-    split(lambda lo, hi, _: _skin_dense3(MT, T, out, lo, hi), len(T))
+    over(_skin_dense3, len(T), MT, T, out)
     return out
 
 

@@ -4,7 +4,8 @@ numba's ``parallel=True`` turns a kernel's ``prange`` loop into a parallel funct
 that costs seconds per kernel (4.5 s for the ray grid, 3.4 s for the crossing filter, on the machine of
 ``benchmarks/RESULTS.md``): about a third of what a first run spends compiling. The kernels on a search's path
 are therefore compiled serial and ``nogil`` (they release Python's lock while they run), with the loop's first
-and last item as arguments, and :func:`split` calls them on consecutive ranges from threads of this process.
+and last item as its last two arguments, and :func:`over` (:func:`split`) calls them on consecutive ranges from
+threads of this process.
 Each item is computed by the same code as before, so the results are the same bits.
 
 The number of threads is numba's (``NUMBA_NUM_THREADS``, :func:`numba.set_num_threads`), so a batch worker
@@ -18,7 +19,7 @@ import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 
-__all__ = ["ranges", "split", "thread_count"]
+__all__ = ["over", "ranges", "split", "thread_count"]
 
 _POOL: tuple[int, int, ThreadPoolExecutor] | None = None  # (process id, workers, pool)
 _POOL_LOCK = threading.Lock()
@@ -78,3 +79,9 @@ def split(call: Callable[[int, int, int], object], n: int, threads: int | None =
     finally:
         for future in futures:
             future.result()
+
+
+def over(kernel: Callable[..., object], n: int, *args) -> None:
+    """Run ``kernel(*args, lo, hi)`` for the consecutive ranges ``[lo, hi)`` of ``range(n)``, one per thread
+    (:func:`split`): a ``nogil`` kernel whose loop runs over its items ``lo:hi``, writing into arrays of ``args``."""
+    split(lambda lo, hi, _: kernel(*args, lo, hi), n)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..base.threads import split
+from ..base.threads import over
 
 from ._grid_common import ENTERING, LEAVING, RISKY, grid_layout, inside_triangle, triangle_edges
 
@@ -116,9 +116,9 @@ def crossings3(X: np.ndarray, F: np.ndarray, orient: float, R: int, tau: float):
     if nx == 0 or len(F) == 0:
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8), (cell, nx, ny, u0, w0)
     counts = np.empty(len(F), np.int64)
-    split(lambda lo, hi, _: _count(X, F, cell, nx, ny, u0, w0, counts, lo, hi), len(F))
+    over(_count, len(F), X, F, cell, nx, ny, u0, w0, counts)
     start = np.concatenate([[0], np.cumsum(counts)])
     pix, z, code = np.empty(start[-1], np.int64), np.empty(start[-1]), np.empty(start[-1], np.int8)
     orient, tau = float(orient), float(tau)
-    split(lambda lo, hi, _: _fill(X, F, orient, tau, cell, nx, ny, u0, w0, start, pix, z, code, lo, hi), len(F))
+    over(_fill, len(F), X, F, orient, tau, cell, nx, ny, u0, w0, start, pix, z, code)
     return pix, z, code, (cell, nx, ny, u0, w0)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..base.threads import split
+from ..base.threads import over
 
 from ._grid_common import (
     face_normal,
@@ -260,7 +260,7 @@ def grid_batch(X, S, orient, R, tau):
 def _batch(kernel, X, S, orient, R, tau):
     """``kernel`` (:func:`_batch3` or :func:`_batch2`) over the poses of ``X``, split over threads."""
     out = np.zeros((X.shape[0], 2), np.float64)
-    split(lambda lo, hi, _: kernel(X, S, orient, int(R), float(tau), out, lo, hi), X.shape[0])
+    over(kernel, X.shape[0], X, S, orient, int(R), float(tau), out)
     return out
 
 

@@ -45,7 +45,7 @@ from numba import njit
 from scipy.cluster.vq import kmeans2
 from scipy.spatial.distance import cdist
 
-from ..base.threads import split
+from ..base.threads import over
 
 __all__ = [
     "ArapData",
@@ -403,7 +403,7 @@ def _rotation_term(S, g, d):
 def _rotation_terms(S):
     """Sum over clusters of :func:`_rotation_term`; ``S`` is (P, d, g, d) (block ``g`` of pose ``p``: ``S[p, :, g]``)."""
     out = np.zeros(S.shape[0])
-    split(lambda lo, hi, _: _rotation_terms_of(S, out, lo, hi), S.shape[0])
+    over(_rotation_terms_of, S.shape[0], S, out)
     return out
 
 

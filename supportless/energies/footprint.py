@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..base.threads import split
+from ..base.threads import over
 
 __all__ = ["FIRST_LAYER_MM", "footprint_area", "section_area"]
 
@@ -58,7 +58,7 @@ def section_area(vertices: np.ndarray, faces: np.ndarray, up: np.ndarray, above:
 def _sections(V, F, U, above):
     """(P,) float64: :func:`section_area` of ``V`` (P, n, 3) along ``U`` (P, 3) unit at ``above`` (P,)."""
     out = np.zeros(len(V))
-    split(lambda lo, hi, _: _sections_of(V, F, U, above, out, lo, hi), len(V))
+    over(_sections_of, len(V), V, F, U, above, out)
     return out
 
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..base.threads import split
+from ..base.threads import over
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
@@ -37,7 +37,7 @@ def _per_pose(kernel, V, S, up, orient, tau, mask, floor):
     """``kernel`` (:func:`_kernel3_poses` or :func:`_kernel2_poses`) over every pose of ``V``, split over threads:
     (P, 2) float64."""
     out = np.zeros((V.shape[0], 2), np.float64)
-    split(lambda lo, hi, _: kernel(V, S, up, orient, float(tau), mask, float(floor), out, lo, hi), len(V))
+    over(kernel, len(V), V, S, up, orient, float(tau), mask, float(floor), out)
     return out
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from ..base.geometry import parse_up, plane_basis
-from ..base.threads import split
+from ..base.threads import over
 
 __all__ = [
     "BACKENDS",
@@ -150,7 +150,7 @@ def signed_area2(X, F):
 def _signed_measure(V, F):
     """(P,) float64: :func:`signed_volume3` or :func:`signed_area2` of each pose of ``V`` (P, n, d)."""
     out = np.zeros(V.shape[0], np.float64)
-    split(lambda lo, hi, _: _signed_measure_of(V, F, out, lo, hi), V.shape[0])
+    over(_signed_measure_of, V.shape[0], V, F, out)
     return out
 
 

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..base.geometry import plane_basis
-from ..base.threads import split
+from ..base.threads import over
 
 __all__ = ["centre_of_mass", "centre_of_mass_operator", "new_contact_depth", "stability_margin",
            "support_polygon"]
@@ -194,7 +194,7 @@ def new_contact_depth(vertices: np.ndarray, up: np.ndarray, clear: np.ndarray, l
 def _lowest(V, index, up):
     """(P,) float64: the least height along ``up`` of the vertices ``index`` of each pose of ``V`` (P, n, 3)."""
     out = np.empty(V.shape[0])
-    split(lambda lo, hi, _: _lowest_of(V, index, up, out, lo, hi), V.shape[0])
+    over(_lowest_of, V.shape[0], V, index, up, out)
     return out
 
 

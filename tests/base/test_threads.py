@@ -59,6 +59,12 @@ def test_an_error_in_any_range_reaches_the_caller(failing):
     assert done == [1 - failing]  # the other range ran to its end
 
 
+def test_over_passes_the_arguments_then_the_range():
+    seen = []
+    threads.over(lambda a, b, lo, hi: seen.append((a, b, lo, hi)), 5, "x", 7)
+    assert sorted(seen) == [("x", 7, lo, hi) for lo, hi in threads.ranges(5, threads.thread_count())]
+
+
 def test_no_items_no_call_and_one_thread_runs_here():
     threads.split(lambda lo, hi, t: pytest.fail("called"), 0)
     idents = []
