@@ -45,7 +45,7 @@ from numba import njit
 from scipy.cluster.vq import kmeans2
 from scipy.spatial.distance import cdist
 
-from ..base.threads import over
+from ..base.threads import one_blas_thread, over
 
 __all__ = [
     "ArapData",
@@ -457,13 +457,13 @@ def arap_energy(data: ArapData, transforms, backend="fast"):
     g = data.n_clusters
 
     T = _stack_transforms(X, m, d)  # (P, n_dof, d)
-    Tt = np.swapaxes(T, 1, 2)  # (P, d, n_dof)
-    quad = 0.5 * np.einsum("pka,pka->p", T, data.quad @ T)
-
-    # Cluster covariances S_g = T^T K_g: (P, d, g*d) -> (P, d, g, d), block g of pose p is S[p, :, g]
-    # (one product per pose: a single (P*d, n_dof) product is multithreaded by BLAS, whose waiting
-    # threads then slow the numba kernels down)
-    S = (Tt @ data.cov).reshape(P, d, g, d)
+    rows = np.ascontiguousarray(np.swapaxes(T, 1, 2)).reshape(P * d, -1)  # T^T of every pose, stacked
+    # one product for every pose, not one per pose (which reads the whole operator again for 3 rows); on one
+    # BLAS thread (:func:`~supportless.base.threads.one_blas_thread`)
+    with one_blas_thread():
+        quad = 0.5 * np.einsum("rk,rk->r", rows, rows @ data.quad).reshape(P, d).sum(axis=1)
+        # cluster covariances S_g = T^T K_g: (P, d, g*d) -> (P, d, g, d), block g of pose p is S[p, :, g]
+        S = (rows @ data.cov).reshape(P, d, g, d)
     if backend == "numpy":
         S = S.transpose(0, 2, 1, 3)  # (P, g, d, d)
         sig = np.linalg.svd(S, compute_uv=False)  # (P, g, d), descending

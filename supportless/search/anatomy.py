@@ -37,8 +37,8 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from ..base.rotations import matrix_to_quaternion
 from ..rig.rig import Rig
 
 __all__ = ["HUMANOID_TABLE", "QUADRUPED_TABLE", "JointRange", "JointRanges", "bone_part", "bone_parts",
@@ -345,7 +345,7 @@ class JointRanges:
         bend = np.arctan2(np.einsum("...ki,ki->...k", u, f), np.einsum("...ki,ki->...k", u, self.reference))
         side = np.arcsin(np.clip(np.einsum("...ki,ki->...k", u, self.axis), -1.0, 1.0))
         swing = np.arccos(np.clip(np.einsum("...ki,ki->...k", u, self.direction), -1.0, 1.0))
-        q = Rotation.from_matrix(Q.reshape(-1, 3, 3)).as_quat().reshape(*Q.shape[:-2], 4)
+        q = matrix_to_quaternion(Q)
         along = np.einsum("...ki,ki->...k", q[..., :3], self.direction)
         twist = np.abs(2.0 * np.arctan2(np.abs(along), np.abs(q[..., 3])))
         return {"bend": bend, "side": side, "swing": swing, "twist": twist}

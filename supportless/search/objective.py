@@ -321,18 +321,18 @@ class Objective:
         """Poses measured at once: :data:`POSE_CHUNK`, fewer on a dense surface (:data:`POSED_VERTICES`)."""
         return max(1, min(POSE_CHUNK, POSED_VERTICES // max(len(self.rig.vertices), 1)))
 
-    def chain_excess(self, transforms: np.ndarray) -> np.ndarray:
-        """How far the chain ends turn past ``chain_limit`` and the heads past ``head_limit``: the sum over
-        them, radians, (P,) float64 (0 when off)."""
+    def chain_excess(self, transforms: np.ndarray, turns: np.ndarray | None = None) -> np.ndarray:
+        """How far the chain ends turn past ``chain_limit`` and the heads past ``head_limit``: the sum over them,
+        radians, (P,) float64 (0 when off). ``turns``: :meth:`end_turns_deg` of ``transforms``, if measured."""
         d = self.rig.dim
         excess = np.zeros(transforms.shape[:-3])
-        for limit, turn in ((self.chain_limit, lambda: self._end_turns_deg(transforms)),
+        for limit, turn in ((self.chain_limit, lambda: self.end_turns_deg(transforms) if turns is None else turns),
                             (self.head_limit, lambda: rotation_angle_deg(transforms[..., self._heads, :d, :d]))):
             if limit is not None and (len(self._ends) if limit is self.chain_limit else len(self._heads)):
                 excess = excess + np.radians(np.maximum(turn() - limit, 0.0)).sum(axis=-1)
         return excess
 
-    def _end_turns_deg(self, transforms: np.ndarray) -> np.ndarray:
+    def end_turns_deg(self, transforms: np.ndarray) -> np.ndarray:
         """(..., k) float64 degrees: each chain end's turn in the world from its rest direction, less the turn
         down of a named upper arm above it (:func:`~supportless.search.relaxed.without_drop`): a hand follows
         its arm down at no cost."""
@@ -349,10 +349,11 @@ class Objective:
         R[..., below, :, :] = np.swapaxes(down, -1, -2) @ R[..., below, :, :]
         return rotation_angle_deg(R)
 
-    def posed_violation(self, transforms: np.ndarray, V: np.ndarray) -> np.ndarray:
+    def posed_violation(self, transforms: np.ndarray, V: np.ndarray, turns: np.ndarray | None = None) -> np.ndarray:
         """How far posed bodies break the rules measured on the pose, not on the joints' own turns: the chain
-        limit, the named joints' ranges and the standing rule; (P,) float64, 0 for a pose that keeps them."""
-        violation = self.chain_excess(transforms)
+        limit, the named joints' ranges and the standing rule; (P,) float64, 0 for a pose that keeps them.
+        ``turns`` as in :meth:`chain_excess`."""
+        violation = self.chain_excess(transforms, turns)
         if self.joint_ranges is not None:
             violation = violation + self.joint_ranges.excess(transforms)
         if self.keep_standing:
@@ -391,22 +392,22 @@ class Objective:
         V = self.rig.pose(np.asarray(angles, np.float64))
         return bool(self.footprint_shortfall(V[None], np.asarray(rotation, np.float64)[None])[0] == 0)
 
-    def prior_cost(self, angles: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+    def prior_cost(self, angles: np.ndarray, transforms: np.ndarray, turns: np.ndarray | None = None) -> np.ndarray:
         """The natural-pose prior: the joints' own turns (:class:`PosePrior`), plus ``w_chain`` times the
         squared turn (radians) of each chain end in the world, summed: three joints turning one way cost
-        more than three turning different ways."""
-        cost = self.prior.cost(angles)
+        more than three turning different ways. ``turns`` as in :meth:`chain_excess`."""
         if not self.w_chain:
-            return cost
-        turn = np.radians(self._end_turns_deg(transforms))
-        return cost + self.w_chain * (turn ** 2).sum(axis=-1)
+            return self.prior.cost(angles)
+        turn = np.radians(self.end_turns_deg(transforms) if turns is None else turns)
+        return self.prior.cost(angles) + self.w_chain * (turn ** 2).sum(axis=-1)
 
     def _cheap_terms(self, angles, transforms, V, rotations=None) -> dict:
         """Every raw term but the (expensive) intersection."""
-        violation = (self.prior.excess(angles) + self.posed_violation(transforms, V)
+        turns = self.end_turns_deg(transforms)
+        violation = (self.prior.excess(angles) + self.posed_violation(transforms, V, turns)
                      + self.footprint_shortfall(V, rotations))
         return {"arap": arap_mod.arap_energy(self.arap_data, transforms, backend=self.backend),
-                "overhang": self.overhang(V, rotations), "prior": self.prior_cost(angles, transforms),
+                "overhang": self.overhang(V, rotations), "prior": self.prior_cost(angles, transforms, turns),
                 "violation": violation}
 
     def normalise(self, raw: dict) -> dict:
@@ -580,7 +581,7 @@ class Objective:
         transforms, V = self._posed(angles, search=True)
         # the terms in order of cost, each only for the poses the cheaper ones leave below their bound (every
         # term is >= 0, so a partial sum is a lower bound); the survivors' value is summed as combine() does
-        prior = np.asarray(self.prior_cost(angles, transforms), np.float64)
+        prior = np.asarray(self.prior_cost(angles, transforms, turns := self.end_turns_deg(transforms)), np.float64)
         overhang = np.asarray(self.overhang(V, rotations), np.float64)
         kept = self.w_overhang * (overhang / self.overhang_scale) + self.w_prior * prior
         todo = np.flatnonzero(kept < bound)
@@ -591,7 +592,7 @@ class Objective:
             todo = todo[kept[todo] < bound[todo]]
         if len(todo):
             Vt = V if len(todo) == len(V) else V[todo]  # (a copy of every pose's surface costs more than the rule)
-            violation[todo] = (excess[todo] + self.posed_violation(transforms[todo], Vt)
+            violation[todo] = (excess[todo] + self.posed_violation(transforms[todo], Vt, turns[todo])
                                + self.footprint_shortfall(Vt, None if rotations is None else rotations[todo]))
             partial = {"arap": arap[todo], "overhang": overhang[todo], "prior": prior[todo],
                        "intersection": 0.0, "violation": violation[todo]}

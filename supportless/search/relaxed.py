@@ -38,6 +38,7 @@ from scipy.spatial.transform import Rotation
 from dataclasses import dataclass
 
 from ..base.kinematics import euler_to_matrix, matrix_to_euler
+from ..base.rotations import matrix_to_quaternion
 from ..rig.rig import Rig
 from .anatomy import bone_parts
 
@@ -116,7 +117,7 @@ def without_drop(R: np.ndarray, axes: np.ndarray, reach: np.ndarray) -> np.ndarr
         The identity for a rotation that is only a turn down within reach.
     """
     R = np.asarray(R, np.float64)
-    q = Rotation.from_matrix(R.reshape(-1, 3, 3)).as_quat().reshape(*R.shape[:-2], 4)  # x, y, z, w
+    q = matrix_to_quaternion(R)  # x, y, z, w
     along = np.einsum("...ki,ki->...k", q[..., :3], axes)
     theta = 2.0 * np.arctan2(along, q[..., 3])
     theta = np.where(theta > np.pi, theta - 2 * np.pi, np.where(theta < -np.pi, theta + 2 * np.pi, theta))

@@ -129,3 +129,18 @@ def test_every_split_kernel_gives_one_threads_bits_on_several(poses, monkeypatch
         for x, y in zip(a if isinstance(a, tuple) else (a,), b if isinstance(b, tuple) else (b,), strict=True):
             np.testing.assert_array_equal(x, y)
     assert several[-1].any()  # two spheres through each other: some triangles are left to the exact test
+
+
+def test_one_blas_thread_holds_blas_to_one_thread_within_the_block_only():
+    from threadpoolctl import threadpool_info
+
+    def blas_threads():
+        return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+    before = blas_threads()
+    assert before, "NumPy's BLAS is not seen by threadpoolctl"
+    with threads.one_blas_thread():
+        assert blas_threads() == [1] * len(before)
+        a = np.arange(12.0).reshape(3, 4)
+        assert np.array_equal(a @ a.T, np.einsum("ik,jk->ij", a, a))
+    assert blas_threads() == before
