@@ -32,6 +32,7 @@ import numpy as np
 
 from ..base.interrupt import deferred_interrupt
 from ..base.progress import step
+from ..base.threads import one_blas_thread
 from ..copyleft.cgal import intersecting_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..files.printframe import REFERENCE_HEIGHT_MM
@@ -99,9 +100,10 @@ def optimize(rig: Rig, settings: SearchSettings | None = None, *, objective: Obj
     """
     settings = (settings or SearchSettings()).replace(**changes)
     request = Request(objective, start, start_rotation, callback, intersects)
-    if _as_mirror_images(rig, settings, start):
-        return mirrored_answer(rig, settings, request)
-    return one_answer(rig, settings.replace(symmetric=bool(settings.symmetric)), request)
+    with one_blas_thread():
+        if _as_mirror_images(rig, settings, start):
+            return mirrored_answer(rig, settings, request)
+        return one_answer(rig, settings.replace(symmetric=bool(settings.symmetric)), request)
 
 
 def one_answer(rig: Rig, settings: SearchSettings, request: Request) -> PoseResult:
