@@ -8,9 +8,9 @@ and last item as its last two arguments, and :func:`over` (:func:`split`) calls 
 threads of this process.
 Each item is computed by the same code as before, so the results are the same bits.
 
-A product of many poses at once is one matrix product instead (ARAP's covariances); :func:`one_blas_thread`
-keeps BLAS on the calling thread for it: BLAS's own threads wait busy for a while after each product, on the
-cores these kernels run on (the Xbot's search took 27 s instead of 21 s with them).
+A product of many poses at once is one matrix product instead (ARAP's covariances), and :func:`one_blas_thread`
+keeps BLAS on the calling thread for the whole search: BLAS's own threads wait busy for a while after each
+product, on the cores these kernels run on (with them the Xbot's search took 27 s instead of 21 s).
 
 The number of threads is numba's (``NUMBA_NUM_THREADS``, :func:`numba.set_num_threads`), so a batch worker
 lowered to one numba thread runs these kernels on one thread too.
