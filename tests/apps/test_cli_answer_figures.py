@@ -16,7 +16,9 @@ The figures were recorded at commit de15cad (before the answer's stages became
 :mod:`supportless.search.answer`; the same refactor left 20fa53c's figures identical too, before that
 commit's cuts to the search changed them in their last digits; both searches' figures were recorded again at
 c910bc1, where only the ``term_history`` (the progress shows the search's own measure of its best, posed
-with its pruned weights) and a mirrored figure's ``symmetry`` and summary row (one mirrored search) moved)
+with its pruned weights) and a mirrored figure's ``symmetry`` and summary row (one mirrored search) moved; and
+again at 6112218, where ARAP's products became one per batch: only the floats that hold ARAP moved, by at most
+1.5e-12 of their size, and the rest pose's round-off ARAP, about 1e-14)
 with ``../shared`` beside the project, by::
 
     PYTHONPATH=. python tests/apps/test_cli_answer_figures.py --record            # the test's small search
