@@ -76,7 +76,8 @@ def at_commits(commits: list[str], models: list[str], rounds: int) -> None:
                     for line in out.stdout.splitlines():
                         print(f"round {r + 1}, {commit}: {line}", flush=True)
                     if out.returncode:
-                        print(f"round {r + 1}, {commit}: failed: {out.stderr.strip().splitlines()[-1:]}", flush=True)
+                        why = (out.stderr.strip().splitlines() or ["no message"])[-1]
+                        print(f"round {r + 1}, {commit}: failed: {why}", flush=True)
         finally:
             for tree in trees.values():
                 subprocess.run(["git", "-C", str(root), "worktree", "remove", "--force", str(tree)], capture_output=True)
