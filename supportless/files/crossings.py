@@ -15,6 +15,7 @@ import numpy as np
 from ..base.isolated import NativeFailure
 from ..copyleft.cgal import intersecting_faces, self_union, split_at_crossings
 from .gridsurface import ISLAND_MIN_VOLUME, grid_surface  # noqa: F401 (re-exported)
+from .meshes import closes_up
 from .simplify import simplify_surface
 from .surfaceops import _collapse_short_edges, _components, _flip_caps, _is_closed, _volume, _weld, transfer_values
 
@@ -326,9 +327,7 @@ def _closed_near(F: np.ndarray, near: np.ndarray) -> bool:
     touching = F[near[F].any(axis=1)]
     E = np.concatenate([touching[:, [0, 1]], touching[:, [1, 2]], touching[:, [2, 0]]])
     E = E[near[E].any(axis=1)]
-    if len(np.unique(E, axis=0)) != len(E):
-        return False
-    return bool(np.all(np.unique(np.sort(E, axis=1), axis=0, return_counts=True)[1] == 2))
+    return closes_up(E)
 
 
 def _faces_near(V: np.ndarray, F: np.ndarray, start: int, tol: float) -> np.ndarray:

@@ -209,6 +209,26 @@ def _pair_keys(pairs: np.ndarray) -> np.ndarray:
     return pairs[:, 0].astype(np.int64) * _key_base(pairs) + pairs[:, 1]
 
 
+def closes_up(E: np.ndarray) -> bool:
+    """Whether directed edges close up: none appears twice, and each undirected edge in exactly two of them (in
+    opposite directions, then); ``np.unique(axis=0)``'s answer, by one int64 a pair.
+
+    Parameters
+    ----------
+    E : (k, 2) int
+        Directed edges (vertex pairs), for example every triangle's three.
+
+    Returns
+    -------
+    closed : bool
+    """
+    directed = np.sort(_pair_keys(E))
+    if np.any(directed[1:] == directed[:-1]):
+        return False
+    _, counts = np.unique(_pair_keys(np.sort(E, axis=1)), return_counts=True)
+    return bool(np.all(counts == 2))
+
+
 def check_closed_surface(F: np.ndarray, path=None) -> None:
     """Check that a surface is closed, 2-manifold and consistently oriented.
 

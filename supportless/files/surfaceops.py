@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .meshes import closes_up
+
 __all__ = ["transfer_values"]
 
 
@@ -57,12 +59,7 @@ def _components(F: np.ndarray, n: int) -> np.ndarray:
 
 def _is_closed(F: np.ndarray) -> bool:
     """Every edge has exactly two faces, in opposite directions."""
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    directed = np.unique(E, axis=0)
-    if len(directed) != len(E):
-        return False
-    undirected, counts = np.unique(np.sort(E, axis=1), axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
+    return closes_up(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]))
 
 
 def _collapse_short_edges(V, F, values, tol):
@@ -100,7 +97,11 @@ def _collapse_short_edges(V, F, values, tol):
 
 
 def _flip_caps(V, F, tol, rounds: int = 5):
-    """Flip the longest edge of each cap (a triangle flatter than ``tol``) with its neighbour's."""
+    """Flip the longest edge of each cap (a triangle flatter than ``tol``) with its neighbour's.
+
+    Each round flips the caps in order, each with the triangle across its longest edge (the last one listed
+    on that edge, should there be more), unless either was flipped this round or the new edge is already one.
+    """
     F = F.copy()
     for _ in range(rounds):
         a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
@@ -110,25 +111,39 @@ def _flip_caps(V, F, tol, rounds: int = 5):
         caps = np.flatnonzero(height < tol)
         if len(caps) == 0:
             break
-        owner = {}
-        for f, (x, y, z) in enumerate(F):
-            owner[(x, y)], owner[(y, z)], owner[(z, x)] = f, f, f
-        edges = {tuple(sorted(e)) for e in owner}
-        touched = set()
-        for f in caps:
+        n = max(len(V), int(F.max()) + 1)
+        directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64)
+        owners = np.tile(np.arange(len(F)), 3)
+        keys = directed[:, 0] * n + directed[:, 1]
+        order = np.lexsort((owners, keys))  # by edge, then face: an edge's last face ends its run
+        keys, owners = keys[order], owners[order]
+        edges = np.unique(np.sort(directed, axis=1) @ np.array([n, 1], np.int64))
+        added: set[int] = set()
+        touched: set[int] = set()
+
+        def owner(p: int, q: int) -> int | None:
+            at = int(np.searchsorted(keys, p * n + q, side="right")) - 1
+            return int(owners[at]) if at >= 0 and keys[at] == p * n + q else None
+
+        def is_edge(p: int, q: int) -> bool:
+            key = min(p, q) * n + max(p, q)
+            at = int(np.searchsorted(edges, key))
+            return key in added or (at < len(edges) and edges[at] == key)
+
+        for f in caps.tolist():
             if f in touched:
                 continue
             k = int(np.argmax(lengths[f]))
             p, q, r = (int(v) for v in np.roll(F[f], -k))  # longest edge p->q, r opposite
-            g = owner.get((q, p))
+            g = owner(q, p)
             if g is None or g in touched:
                 continue
             d = int(next(v for v in F[g] if v not in (p, q)))
-            if tuple(sorted((r, d))) in edges or r == d:
+            if is_edge(r, d) or r == d:
                 continue
             F[f] = (p, d, r)
             F[g] = (d, q, r)
-            edges.add(tuple(sorted((r, d))))
+            added.add(min(r, d) * n + max(r, d))
             touched.update((f, g))
     return F
 
