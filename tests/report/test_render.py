@@ -262,3 +262,40 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(ValueError):
         render_mesh(tmp_path / "x.png", V, F, UP, risky=np.ones(3, bool))
     assert list(tmp_path.iterdir()) == []
+
+
+def _drawn(tris, rgb, size=64):
+    """RGB (size, size, 3) uint8 of flat triangles drawn on a white square of the unit box."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from supportless.report.render import _FlatTriangles
+
+    fig = Figure(figsize=(1, 1), dpi=size, facecolor="white")
+    FigureCanvasAgg(fig)
+    ax = fig.add_axes((0, 0, 1, 1))
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.set_axis_off()
+    ax.add_artist(_FlatTriangles(np.asarray(tris, np.float64), np.asarray(rgb, np.float64), zorder=2))
+    fig.canvas.draw()
+    return np.asarray(fig.canvas.buffer_rgba())[..., :3]
+
+
+def test_flat_triangles_leave_no_seam_between_neighbours():
+    # a square of two triangles of one colour: its shared diagonal is that colour too, nothing shows through
+    grey = (0.5, 0.5, 0.5)
+    img = _drawn([[(0.1, 0.1), (0.9, 0.1), (0.9, 0.9)], [(0.1, 0.1), (0.9, 0.9), (0.1, 0.9)]], [grey, grey])
+    inside = img[10:54, 10:54].reshape(-1, 3)
+    assert np.all(np.abs(inside.astype(int) - 128) <= 1), "a seam or a gap inside the square"
+    assert np.all(img[:4, :] == 255) and np.all(img[:, :4] == 255), "drawn outside the triangles"
+
+
+def test_flat_triangles_later_ones_cover_earlier_ones():
+    red, blue = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0)
+    big = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+    small = [(0.1, 0.1), (0.4, 0.1), (0.1, 0.4)]
+    for order, top in (((big, small), blue), ((small, big), red)):
+        img = _drawn(order, [red, blue] if order[0] is big else [blue, red])
+        centre = img[64 - 1 - 13, 13]  # (0.2, 0.2): inside both, row 0 at the top
+        np.testing.assert_array_equal(centre, np.round(255 * np.array(top)).astype(np.uint8))
