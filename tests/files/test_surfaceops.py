@@ -21,12 +21,14 @@ def _flip_caps_by_dicts(V, F, tol, rounds=5):
     """The caps flipped with Python dictionaries of every edge, rebuilt each round."""
     F = F.copy()
     for _ in range(rounds):
-        a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-        lengths = np.column_stack([np.linalg.norm(b - a, axis=1), np.linalg.norm(c - b, axis=1),
-                                   np.linalg.norm(a - c, axis=1)])
-        height = np.linalg.norm(np.cross(b - a, c - a), axis=1) / np.maximum(lengths.max(1), 1e-300)
-        caps = np.flatnonzero(height < tol)
-        if len(caps) == 0:
+        lengths, caps = [], []
+        for f, corners in enumerate(V[F]):  # each triangle's sides and its height over the longest
+            sides = [float(np.linalg.norm(corners[(i + 1) % 3] - corners[i])) for i in range(3)]
+            twice_area = float(np.linalg.norm(np.cross(corners[1] - corners[0], corners[2] - corners[0])))
+            lengths.append(sides)
+            if twice_area / max(max(sides), 1e-300) < tol:
+                caps.append(f)
+        if not caps:
             break
         owner = {}
         for f, (x, y, z) in enumerate(F):
