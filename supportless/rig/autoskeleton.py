@@ -395,8 +395,12 @@ def inside_joints(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, b
     F = np.asarray(faces, np.int64)
     J, B = np.array(joints, np.float64), np.array(bones, np.int64)
 
+    V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
+    winding = igl.FastWindingNumberBVH()  # the tree built once for every question below
+    winding.init(V, F)
+
     def inside(points):
-        return igl.fast_winding_number(V, F, np.atleast_2d(points)) > 0.5
+        return np.asarray(winding.winding_number(np.ascontiguousarray(np.atleast_2d(points), np.float64))) > 0.5
 
     t = np.linspace(0.02, 0.98, 49)
     while True:
