@@ -107,6 +107,8 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
         from .gltf_skin import read_rest_triangles
 
         simple = read_rest_triangles(path)
+    elif ext == "stl":
+        simple = _read_stl(path)
     else:
         simple = _read_plain_obj(path) if ext == "obj" else None
     if simple is not None:
@@ -128,6 +130,22 @@ def read_mesh(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
         raise InputError(path, "vertex coordinates contain NaN or infinity")
     V, F = merge_duplicate_vertices(V, F)
     return V, F
+
+
+def _read_stl(path: Path) -> tuple[np.ndarray, np.ndarray] | None:
+    """An STL file's triangle soup by trimesh's own STL reader, without the scene it would be wrapped in (1.7 s of
+    copies for a written sculpt's 1.8 million triangles); None for what that reader does not give as one mesh
+    (several named solids, no triangle, a damaged file), which :func:`read_mesh` hands to ``trimesh.load``."""
+    from trimesh.exchange.stl import load_stl
+
+    try:
+        with open(path, "rb") as fh:
+            loaded = load_stl(fh)
+    except Exception:  # noqa: BLE001 - trimesh.load reads it again and says what is wrong
+        return None
+    if "vertices" not in loaded or "faces" not in loaded:
+        return None
+    return np.asarray(loaded["vertices"], np.float64), np.asarray(loaded["faces"], np.int64)
 
 
 def _check_obj_vertex_lines(path: Path) -> None:

@@ -655,3 +655,25 @@ def test_a_bad_vertex_line_of_an_otherwise_plain_obj_still_names_its_line(tmp_pa
     path.write_text(OBJ_PLAIN.replace("v 0 1 0", "v 0 one 0"))
     with pytest.raises(sl.InputError, match="line 6 is not a vertex"):
         io.read_mesh(path)
+
+
+@pytest.mark.parametrize("kind", ["binary", "ascii", "two solids"])
+def test_stl_read_as_trimesh_reads_it(tmp_path, kind):
+    # binary and single-solid ASCII STL go through trimesh's STL reader alone; several solids through trimesh.load:
+    # either way the mesh trimesh.load gives, welded
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    path = tmp_path / "m.stl"
+    if kind == "binary":
+        mesh.export(path, file_type="stl")
+    else:
+        text = trimesh.exchange.stl.export_stl_ascii(mesh)
+        path.write_text(text if kind == "ascii" else text + text.replace("solid", "solid other", 1))
+    assert (io._read_stl(path) is None) == (kind == "two solids")
+    loaded = trimesh.load(str(path), file_type="stl", process=False, force="mesh")
+    expected = io.merge_duplicate_vertices(np.asarray(loaded.vertices, np.float64), np.asarray(loaded.faces, np.int64))
+    V, F = sl.read_mesh(path)
+    np.testing.assert_array_equal(V, expected[0])
+    np.testing.assert_array_equal(F, expected[1])
+    assert len(F) == len(mesh.faces) * (2 if kind == "two solids" else 1)
