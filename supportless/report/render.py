@@ -3,7 +3,8 @@
 Everything is drawn with matplotlib's Agg backend (no display needed) using a
 hand-rolled orthographic projection and painter's algorithm: faces are
 projected to the screen, Lambert-shaded from their normals and drawn far to
-near as a 2D :class:`~matplotlib.collections.PolyCollection`.  The printing
+near, each in one colour, by the renderer's triangles in one call (a 2D
+figure's as a :class:`~matplotlib.collections.PolyCollection`).  The printing
 direction ``up`` is always shown vertically on screen and the build plate is
 drawn as a light grid at the mesh's lowest point along ``up``.
 
