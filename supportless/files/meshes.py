@@ -240,11 +240,16 @@ def closes_up(E: np.ndarray) -> bool:
     -------
     closed : bool
     """
-    directed = np.sort(_pair_keys(E))
-    if np.any(directed[1:] == directed[:-1]):
+    if _repeats_a_directed_edge(E):
         return False
     _, counts = np.unique(_pair_keys(np.sort(E, axis=1)), return_counts=True)
     return bool(np.all(counts == 2))
+
+
+def _repeats_a_directed_edge(E: np.ndarray) -> bool:
+    """Whether a directed edge (a row of ``E`` (k, 2)) appears twice: two triangles wound the same way across it."""
+    directed = np.sort(_pair_keys(E))
+    return bool(np.any(directed[1:] == directed[:-1]))
 
 
 def check_closed_surface(F: np.ndarray, path=None) -> None:
@@ -273,8 +278,7 @@ def check_closed_surface(F: np.ndarray, path=None) -> None:
         )
     if nonmanifold:
         raise InputError(path, f"surface is not manifold: {nonmanifold} edges are shared by more than two faces")
-    directed = np.sort(_pair_keys(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])))
-    if np.any(directed[1:] == directed[:-1]):
+    if _repeats_a_directed_edge(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])):
         raise InputError(path, "surface is not consistently oriented: some neighbouring faces have opposite winding")
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .meshes import closes_up
+from .meshes import _key_base, _pair_keys, closes_up
 
 __all__ = ["transfer_values"]
 
@@ -111,13 +111,13 @@ def _flip_caps(V, F, tol, rounds: int = 5):
         caps = np.flatnonzero(height < tol)
         if len(caps) == 0:
             break
-        n = max(len(V), int(F.max()) + 1)
         directed = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]).astype(np.int64)
+        n = _key_base(directed)  # every key below is p * n + q
         owners = np.tile(np.arange(len(F)), 3)
-        keys = directed[:, 0] * n + directed[:, 1]
+        keys = _pair_keys(directed)
         order = np.lexsort((owners, keys))  # by edge, then face: an edge's last face ends its run
         keys, owners = keys[order], owners[order]
-        edges = np.unique(np.sort(directed, axis=1) @ np.array([n, 1], np.int64))
+        edges = np.unique(_pair_keys(np.sort(directed, axis=1)))
         added: set[int] = set()
         touched: set[int] = set()
 

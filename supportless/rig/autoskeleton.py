@@ -391,11 +391,10 @@ def inside_joints(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, b
     """
     import igl
 
-    V = np.asarray(vertices, np.float64)
-    F = np.asarray(faces, np.int64)
+    V = np.ascontiguousarray(vertices, np.float64)
+    F = np.ascontiguousarray(faces, np.int64)
     J, B = np.array(joints, np.float64), np.array(bones, np.int64)
 
-    V, F = np.ascontiguousarray(V), np.ascontiguousarray(F)
     winding = igl.FastWindingNumberBVH()  # the tree built once for every question below
     winding.init(V, F)
 
