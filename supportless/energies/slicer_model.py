@@ -150,14 +150,16 @@ def support_features(vertices, faces, up, overhang_angle, scale=1.0, delta=DELTA
     proj = np.where(risky, -along, 0.0)
     H = float(interface_mm)
     edges, left, right = _edge_faces(F)
-    outline = risky[:, left] != risky[:, right]  # (P, e)
-    ends = V[:, edges]  # (P, e, 2, 3)
-    step = ends[:, :, 1] - ends[:, :, 0]
-    seen_from_above = np.linalg.norm(step - (step @ u)[..., None] * u, axis=-1)
-    h_edge = ends.sum(axis=2) @ u / 2.0 - plate
+    p, e = np.nonzero(risky[:, left] != risky[:, right])  # the outlines' edges (a few of all), pose by pose
+    ends = V[p[:, None], edges[e]]  # (k, 2, 3)
+    step = ends[:, 1] - ends[:, 0]
+    seen_from_above = np.linalg.norm(step - (step @ u)[:, None] * u, axis=-1)
+    h_edge = ends.sum(axis=1) @ u / 2.0 - plate[p, 0]
+    rim = np.zeros((len(V), len(edges)))  # summed over every edge, zero off the outline: the same sum as over all
+    rim[p, e] = seen_from_above * np.minimum(h_edge, H)
     features = np.stack([(proj * np.minimum(h, H)).sum(1) / H,
                          (proj * np.maximum(h - H, 0.0)).sum(1),
-                         (np.where(outline, seen_from_above, 0.0) * np.minimum(h_edge, H)).sum(1) / H], axis=1)
+                         rim.sum(1) / H], axis=1)
     return features[0] if single else features
 
 
@@ -186,7 +188,7 @@ def predicted_support_mm(vertices, faces, up, overhang_angle, scale=1.0, coeffic
     c = np.asarray(coefficients, np.float64)
     if V.ndim == 2:
         return float(support_features(V, faces, up, overhang_angle, scale) @ c)
-    # poses in chunks: the edge arrays are (P, e, 2, 3)
+    # poses in chunks: the corner arrays are (P, f, 3)
     chunk = max(1, _CHUNK_ELEMENTS // max(len(faces), 1))
     return np.concatenate([support_features(V[i:i + chunk], faces, up, overhang_angle, scale) @ c
                            for i in range(0, len(V), chunk)]) if len(V) else np.zeros(0)

@@ -295,3 +295,17 @@ def test_slice_run_says_a_failing_slicer_in_one_line_and_cancel_stops_it(tmp_pat
     import subprocess
 
     assert subprocess.run(["pgrep", "-f", str(tmp_path / "slow")], capture_output=True).returncode == 1  # none left
+
+
+def test_a_poses_bone_frames_turn_into_quaternions_at_once_as_one_by_one():
+    from supportless.apps.ui.scene import matrix_from_quat, quat_from_matrix
+
+    rng = np.random.default_rng(5)
+    R = np.stack([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(40)])
+    R[np.linalg.det(R) < 0] *= -1.0  # rotations, not reflections
+    R[:4] = [np.eye(3), np.diag([1.0, -1, -1]), np.diag([-1.0, 1, -1]), np.diag([-1.0, -1, 1])]  # each of the branches
+    q = quat_from_matrix(R)
+    assert q.shape == (40, 4)
+    assert np.array_equal(q, np.stack([quat_from_matrix(r) for r in R]))
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
+    assert np.allclose(np.stack([matrix_from_quat(x) for x in q]), R, atol=1e-12)

@@ -93,3 +93,39 @@ def test_batched_equals_single_and_rigid_moves_in_the_plate_cost_nothing():
     single = predicted_support_mm(V, F, "z", 53.13, scale=2.0)
     assert batch[0] == pytest.approx(single) and batch[1] == pytest.approx(single, rel=1e-12)
     assert single == pytest.approx(np.dot(COEFFICIENTS, support_features(V, F, "z", 53.13, scale=2.0)))
+
+
+def _rim_by_edges(V, F, up, overhang_angle):
+    """The rim feature edge by edge: every edge between a risky face and one that is not, its length seen along
+    ``up`` times its midpoint's height over the plate, capped at :data:`INTERFACE_MM`, over the cap."""
+    u = np.asarray(up, float) / np.linalg.norm(up)
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    tau = np.cos(np.radians(overhang_angle + DELTA))
+    risky = n @ u < -tau * np.linalg.norm(n, axis=1)
+    faces_of: dict = {}
+    for f, tri in enumerate(F):
+        for k in range(3):
+            faces_of.setdefault(tuple(sorted((int(tri[k]), int(tri[(k + 1) % 3])))), []).append(f)
+    plate = (V @ u).min()
+    rim = 0.0
+    for (i, j), (f, g) in faces_of.items():
+        if risky[f] != risky[g]:
+            d = V[j] - V[i]
+            rim += np.linalg.norm(d - (d @ u) * u) * min((V[i] + V[j]) @ u / 2 - plate, INTERFACE_MM)
+    return rim / INTERFACE_MM
+
+
+def test_the_rim_is_the_outline_edges_alone_pose_by_pose():
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=5.0)
+    V0, F = np.asarray(sphere.vertices), np.asarray(sphere.faces, np.int64)
+    rng = np.random.default_rng(3)
+    poses = []
+    for _ in range(4):  # lumpy spheres, each turned its own way: outlines of different edges
+        V = V0 * (1.0 + 0.3 * rng.random((len(V0), 1)))
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        poses.append(V @ q.T)
+    poses = np.stack(poses)
+    rims = support_features(poses, F, "z", 45.0)[:, 2]
+    expected = [_rim_by_edges(V, F, (0, 0, 1.0), 45.0) for V in poses]
+    assert rims == pytest.approx(expected, rel=1e-12)
+    assert len(set(np.round(rims, 6))) == len(poses) and min(rims) > 0

@@ -95,7 +95,8 @@ def placement3(placement) -> tuple[np.ndarray, np.ndarray]:
 
 
 def quat_from_matrix(R: np.ndarray) -> np.ndarray:
-    """Rotation matrix (3, 3) -> unit quaternion (4,) ``wxyz``, as viser takes it."""
+    """Rotation matrices (..., 3, 3) -> unit quaternions (..., 4) ``wxyz``, as viser takes them (a pose's bones in
+    one call: viser's conversion costs about 0.2 ms a call, whatever the batch)."""
     import viser.transforms as vtf
 
     return np.asarray(vtf.SO3.from_matrix(R).wxyz, np.float64)
@@ -338,9 +339,10 @@ class Scene:
         if locked is not None:
             colors[locked] = BONE_LOCKED_COLOR
         colors[selected] = BONE_SELECTED_COLOR
+        wxyz = quat_from_matrix(Q)
         with self.server.atomic():
             for b, bone in enumerate(self.h_mesh.bones):
-                bone.wxyz = quat_from_matrix(Q[b])
+                bone.wxyz = wxyz[b]
                 bone.position = pos[b]
             for j, h in enumerate(self.h_joints):
                 h.position = J[j]
@@ -348,7 +350,7 @@ class Scene:
             self.h_bones.colors = np.repeat(colors[:, None], 2, axis=1)
             if move_gizmo:
                 self.h_gizmo.position = pos[selected]
-                self.h_gizmo.wxyz = quat_from_matrix(Q[selected])
+                self.h_gizmo.wxyz = wxyz[selected]
         self.server.flush()
 
     def draw_overlays(self, vertices: np.ndarray, risky: np.ndarray | None, intersecting: np.ndarray | None,
