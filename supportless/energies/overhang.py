@@ -30,7 +30,7 @@ from ..base.threads import over
 from ..files.printer import SEARCH_OVERHANG_ANGLE
 from .surface import boundary_edges, check_backend, orientation_sign, prepare
 
-__all__ = ["overhang_energy", "risky_faces", "risky_area", "projected_risky_area"]
+__all__ = ["overhang_energy", "overhang_measures", "risky_faces", "risky_area", "projected_risky_area"]
 
 
 def _per_pose(kernel, V, S, up, orient, tau, mask, floor):
@@ -260,6 +260,25 @@ def risky_area(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backen
     """
     out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
     return _out(out[:, 1], single)
+
+
+def overhang_measures(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backend="fast"):
+    """:func:`overhang_energy` and :func:`risky_area` of the same poses, from one pass over their faces.
+
+    Parameters
+    ----------
+    vertices, faces, up, overhang_angle, backend
+        As :func:`overhang_energy`.
+
+    Returns
+    -------
+    energy : (P,) float64 or float
+        :func:`overhang_energy` (no floor), the same value.
+    area : (P,) float64 or float
+        :func:`risky_area`, the same value.
+    """
+    out, _, single = _compute(vertices, faces, up, overhang_angle, backend)
+    return _out(out[:, 0], single), _out(out[:, 1], single)
 
 
 def overhang_energy(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, backend="fast", floor=0.0, orient=None):

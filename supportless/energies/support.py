@@ -92,7 +92,7 @@ def support_columns(vertices, faces, up, overhang_angle=SEARCH_OVERHANG_ANGLE, r
     if not single or V.shape[-1] != 3:
         raise ValueError("support_columns takes one 3D pose, (n, 3) vertices")
     tau = float(np.cos(np.deg2rad(float(overhang_angle))))
-    orient = float(orientation_sign(V, F, "numpy")[0])
+    orient = float(orientation_sign(V, F)[0])
     X = to_frame(V, u)[0]
     pix, z, code, (cell, nx, _, u0, w0) = crossings3(X, F, orient, int(resolution), tau)
     _, _, (pix, bottom, top) = sweep_crossings(pix, z, code, float(X[:, 2].min()))

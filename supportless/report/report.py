@@ -22,7 +22,7 @@ import numpy as np
 from ..base.geometry import place_on_plate, print_pose, print_transform
 from ..copyleft.cgal import intersecting_face_pairs
 from ..energies.intersection import self_intersection_volume
-from ..energies.overhang import overhang_energy, risky_area, risky_faces
+from ..energies.overhang import overhang_measures, risky_faces
 from ..energies.slicer_model import predicted_support_mm
 from ..energies.support import support_volume
 from ..files.printer import DEFAULT_DENSITY, FILAMENT_DIAMETER_MM, mm_to_cm3, reduction, slicer_label
@@ -42,11 +42,9 @@ __all__ = ["REFERENCE_HEIGHT_MM", "build_report", "duration_text", "filament_gra
 
 
 def _support_measures(V, faces, up, angle, resolution) -> dict:
-    return {
-        "support_prism": float(overhang_energy(V, faces, up, angle)),
-        "support_column": float(support_volume(V, faces, up, angle, resolution)),
-        "risky_area": float(risky_area(V, faces, up, angle)),
-    }
+    prism, area = overhang_measures(V, faces, up, angle)
+    return {"support_prism": float(prism), "support_column": float(support_volume(V, faces, up, angle, resolution)),
+            "risky_area": float(area)}
 
 
 def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_angle: float | None = None,
@@ -95,7 +93,7 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
         "arap": float(raw["arap"]),
         "overhang_angle": float(angle),
         **_support_measures(printed, rig.faces, rig.up, angle, objective.resolution),
-        "self_intersection_volume": float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution)),
+        "self_intersection_volume": _intersection_volume(objective, angles, V, raw, vertices is None),
     }
     if rotation is not None:
         out["upright"] = _support_measures(V, rig.faces, rig.up, angle, objective.resolution)
@@ -103,6 +101,16 @@ def pose_measures(objective, angles: np.ndarray, exact: bool = True, overhang_an
     if exact:
         out["intersecting_face_pairs"] = intersecting_face_pairs(V, rig.faces)
     return out
+
+
+def _intersection_volume(objective, angles: np.ndarray, V: np.ndarray, raw: dict, posed_here: bool) -> float:
+    """The self-intersection volume of ``V`` (n, d) float64, the pose ``angles`` (m, 3) float64: the objective's own
+    measure ``raw["intersection"]`` when it measured this very surface (``rig.pose(angles)``, bit for bit, with the
+    default kernel), else measured."""
+    rig = objective.rig
+    if objective.backend == "fast" and (posed_here or np.array_equal(V, rig.pose(angles))):
+        return float(raw["intersection"])
+    return float(self_intersection_volume(V, rig.faces, rig.up, objective.resolution))
 
 
 #: The printed height the report's predicted slicer filament is for when no print frame is given, mm.

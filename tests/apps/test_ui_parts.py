@@ -309,3 +309,24 @@ def test_a_poses_bone_frames_turn_into_quaternions_at_once_as_one_by_one():
     assert np.array_equal(q, np.stack([quat_from_matrix(r) for r in R]))
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0)
     assert np.allclose(np.stack([matrix_from_quat(x) for x in q]), R, atol=1e-12)
+
+
+def test_support_levels_are_thirds_of_the_largest_need_among_the_risky_faces():
+    from supportless.apps.ui.scene import support_levels
+
+    rng = np.random.default_rng(2)
+    V = rng.normal(size=(60, 3)) * [3.0, 3.0, 8.0]
+    F = rng.integers(0, 60, size=(90, 3))
+    F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])]
+    up = np.array([0.0, 0.0, 1.0])
+    risky = rng.random(len(F)) < 0.4
+    levels = support_levels(V, F, up, risky)
+    h = [V[f].mean(axis=0) @ up for f in F]  # each face on its own: steepness times height over the lowest face
+    need = []
+    for f, height in zip(F, h):
+        n = np.cross(V[f[1]] - V[f[0]], V[f[2]] - V[f[0]])
+        need.append(abs(n @ up) / np.linalg.norm(n) * (height - min(h)))
+    top = max(need[i] for i in np.flatnonzero(risky))
+    expected = [(0 if x < top / 3 else 1 if x < 2 * top / 3 else 2) if r else 0 for x, r in zip(need, risky)]
+    assert levels.tolist() == expected and set(expected) == {0, 1, 2}
+    assert not support_levels(V, F, up, np.zeros(len(F), bool)).any()

@@ -7,6 +7,7 @@ from meshes import box, cells_mesh, t_shape, union
 
 from supportless.energies.overhang import (
     overhang_energy,
+    overhang_measures,
     projected_risky_area,
     risky_area,
     risky_faces,
@@ -126,6 +127,16 @@ def test_batch_equals_single():
     for p in range(5):
         np.testing.assert_array_equal(masks[p], risky_faces(VV[p], F, UP))
     assert len(np.unique(np.round(overhang_energy(VV, F, UP), 9))) > 1
+
+
+def test_both_measures_in_one_pass_are_each_measures_value():
+    V, F = t_shape()
+    rng = np.random.default_rng(1)
+    VV = np.stack([V @ rot_about(rng.normal(size=3), rng.uniform(0, np.pi)).T for _ in range(4)])
+    energy, area = overhang_measures(VV, F, UP, 40.0)
+    assert np.array_equal(energy, overhang_energy(VV, F, UP, 40.0)) and np.array_equal(area, risky_area(VV, F, UP, 40.0))
+    one = overhang_measures(VV[2], F, UP, 40.0)
+    assert one == (overhang_energy(VV[2], F, UP, 40.0), risky_area(VV[2], F, UP, 40.0)) and one[0] > 0 < one[1]
 
 
 def test_scaling_cubic():

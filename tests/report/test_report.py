@@ -46,6 +46,23 @@ def test_pose_measures_are_the_energies_at_the_given_threshold(branch_rig):
     assert pose_measures(obj, angles, exact=False, vertices=V) == pose_measures(obj, angles, exact=False)
 
 
+def test_a_crossing_poses_overlap_is_the_objectives_own_measure_of_the_same_surface(branch_rig):
+    rig = branch_rig
+    obj = SearchSettings().objective(rig)
+    angles = np.zeros((rig.bone_count, 3))
+    angles[1, 2] = 1.5  # one branch folded into the other
+    V = rig.pose(angles)
+    overlap = sl.self_intersection_volume(V, rig.faces, rig.up, obj.resolution)
+    assert overlap > 1.0
+    for vertices in (None, V.copy()):  # posed here or given: the same surface, the objective's measure
+        m = pose_measures(obj, angles, exact=False, vertices=vertices)
+        assert m["self_intersection_volume"] == overlap
+    larger = V * 1.01  # another surface than the pose's: measured as given
+    m = pose_measures(obj, angles, exact=False, vertices=larger)
+    assert m["self_intersection_volume"] == sl.self_intersection_volume(larger, rig.faces, rig.up, obj.resolution)
+    assert m["self_intersection_volume"] == pytest.approx(1.01 ** 3 * overlap, rel=0.02)
+
+
 def test_build_report_compares_rest_and_found_pose_at_the_printers_threshold(branch_rig, searched):
     rig = branch_rig
     rep = build_report(rig, searched)

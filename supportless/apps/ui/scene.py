@@ -146,17 +146,19 @@ def support_levels(V3: np.ndarray, F: np.ndarray, up: np.ndarray, risky: np.ndar
     -------
     levels : (f,) int64
         0, 1 or 2 by steepness times height above the lowest face, in thirds
-        of the largest among the risky faces.
+        of the largest among the risky faces; 0 where not risky (only the risky faces are measured).
     """
-    a, b, c = V3[F[:, 0]], V3[F[:, 1]], V3[F[:, 2]]
+    levels = np.zeros(len(F), np.int64)
+    r = np.flatnonzero(risky)
+    if not len(r):
+        return levels
+    h = V3[F].sum(axis=1) @ up / 3.0
+    a, b, c = V3[F[r, 0]], V3[F[r, 1]], V3[F[r, 2]]
     n = np.cross(b - a, c - a)
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
-    h = ((a + b + c) / 3) @ up
-    need = np.abs(n @ up) * (h - h.min())
-    if not risky.any():
-        return np.zeros(len(F), np.int64)
-    top = max(float(need[risky].max()), 1e-30)
-    return np.digitize(need / top, [1 / 3, 2 / 3])
+    steep = np.abs(n @ up) / np.maximum(np.linalg.norm(n, axis=1), 1e-30)
+    need = steep * (h[r] - h.min())
+    levels[r] = np.digitize(need / max(float(need.max()), 1e-30), [1 / 3, 2 / 3])
+    return levels
 
 
 def draw_welcome(server, text: str) -> None:
