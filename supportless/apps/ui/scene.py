@@ -152,7 +152,7 @@ def support_levels(V3: np.ndarray, F: np.ndarray, up: np.ndarray, risky: np.ndar
     r = np.flatnonzero(risky)
     if not len(r):
         return levels
-    h = V3[F].sum(axis=1) @ up / 3.0
+    h = (V3 @ up)[F].sum(axis=1) / 3.0  # each face's centre's height
     a, b, c = V3[F[r, 0]], V3[F[r, 1]], V3[F[r, 2]]
     n = np.cross(b - a, c - a)
     steep = np.abs(n @ up) / np.maximum(np.linalg.norm(n, axis=1), 1e-30)
