@@ -171,8 +171,11 @@ def main(argv=None):
     p.add_argument("--w-chain", type=float, default=None, help="SearchSettings.w_chain.")
     p.add_argument("--symmetric", choices=("auto", "on", "off"), default="auto",
                    help="SearchSettings.symmetric: None (the tool's choice), True or False.")
+    p.add_argument("--particles", type=int, default=None, help="SearchSettings.particles.")
+    p.add_argument("--iterations", type=int, default=None, help="SearchSettings.iterations.")
     args = p.parse_args(argv)
-    settings = sl.SearchSettings().replace(chain_limit=args.chain_limit, w_chain=args.w_chain)
+    settings = sl.SearchSettings().replace(chain_limit=args.chain_limit, w_chain=args.w_chain,
+                                           particles=args.particles, iterations=args.iterations)
     if args.no_anatomy:
         settings = settings.replace(anatomy=False)
     settings = settings.replace(symmetric={"auto": None, "on": True, "off": False}[args.symmetric])
