@@ -17,7 +17,7 @@ from ..base.errors import InputError
 from ..base.geometry import parse_up
 
 __all__ = ["JOINT_INSIDE_MARGIN", "JOINT_OUTSIDE_TOLERANCE", "RigSkeleton", "TREE_FACES", "depth_below", "joint_order",
-           "pull_joints_inside",
+           "pull_joints_inside", "winding_numbers_of",
            "skeleton_from_joints"]
 
 #: A joint outside the surface by at most this fraction of the model's height is
@@ -281,14 +281,34 @@ def depth_below(V: np.ndarray, F: np.ndarray):
                                                          igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0])
     tree = igl.AABB()
     tree.init(V, F)
-    winding = igl.FastWindingNumberBVH()  # built once too: fast_winding_number(V, F, P)'s values, without its tree
-    winding.init(V, F)                    # made again at every call (a second on 1.8 million triangles)
+    winding = winding_numbers_of(V, F)
 
     def depth(P):
         P = np.ascontiguousarray(P, np.float64)
         distance = np.sqrt(np.asarray(tree.squared_distance(V, F, P)[0]))
-        return np.where(np.asarray(winding.winding_number(P)) > 0.5, distance, -distance)
+        return np.where(winding(P) > 0.5, distance, -distance)
     return depth
+
+
+def winding_numbers_of(V: np.ndarray, F: np.ndarray):
+    """libigl's fast winding number of a surface with its tree built once (``igl.fast_winding_number(V, F, P)``
+    builds it again at every call: a second on 1.8 million triangles); the same values.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (f, 3) int64
+
+    Returns
+    -------
+    winding : callable
+        ``winding(points (p, 3) float64) -> (p,) float64``.
+    """
+    import igl
+
+    tree = igl.FastWindingNumberBVH()
+    tree.init(np.ascontiguousarray(V, np.float64), np.ascontiguousarray(F, np.int64))
+    return lambda P: np.asarray(tree.winding_number(np.ascontiguousarray(np.atleast_2d(P), np.float64)))
 
 
 def pull_joints_inside(V: np.ndarray, F: np.ndarray, joints: np.ndarray, bones: np.ndarray, up,

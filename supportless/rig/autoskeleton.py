@@ -29,6 +29,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import minimum_spanning_tree
 
 from ..base.errors import InputError
+from ..files.joints import winding_numbers_of
 
 __all__ = ["BONE_RANGE", "GRID_CELLS", "TWIG_SHARE", "auto_skeleton", "planar_skeleton", "bones_from_tree", "curve_skeleton",
            "inside_joints", "surface_graph"]
@@ -389,17 +390,12 @@ def inside_joints(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray, b
     joints : (j', 3) float64
     bones : (m', 2) int64
     """
-    import igl
-
-    V = np.ascontiguousarray(vertices, np.float64)
-    F = np.ascontiguousarray(faces, np.int64)
+    V = np.asarray(vertices, np.float64)
     J, B = np.array(joints, np.float64), np.array(bones, np.int64)
-
-    winding = igl.FastWindingNumberBVH()  # the tree built once for every question below
-    winding.init(V, F)
+    winding = winding_numbers_of(V, faces)  # the tree built once for every question below
 
     def inside(points):
-        return np.asarray(winding.winding_number(np.ascontiguousarray(np.atleast_2d(points), np.float64))) > 0.5
+        return winding(points) > 0.5
 
     t = np.linspace(0.02, 0.98, 49)
     while True:

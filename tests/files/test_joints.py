@@ -123,3 +123,20 @@ def test_depth_below_a_surface_by_the_tree_agrees_with_the_exact_signed_distance
     by_tree = joints_mod.depth_below(V, F)(P)
     np.testing.assert_allclose(by_tree, exact, atol=1e-12)
     np.testing.assert_allclose(exact, 2.0 - np.linalg.norm(P, axis=1), atol=0.02)  # the facets lie within 0.02
+
+
+def test_winding_numbers_of_a_surface_are_libigls_fast_ones_with_one_tree():
+    import igl
+    import trimesh
+
+    from supportless.files.joints import winding_numbers_of
+
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
+    V, F = np.asarray(sphere.vertices), np.asarray(sphere.faces, np.int64)
+    P = np.random.default_rng(4).uniform(-3.0, 3.0, size=(400, 3))
+    winding = winding_numbers_of(V, F)
+    assert np.array_equal(winding(P), igl.fast_winding_number(V, F, P))
+    inside = np.linalg.norm(P, axis=1) < 1.9
+    outside = np.linalg.norm(P, axis=1) > 2.1
+    assert np.all(winding(P)[inside] > 0.9) and np.all(np.abs(winding(P)[outside]) < 0.1)
+    assert winding(P[0]).shape == (1,)  # one point asked on its own
