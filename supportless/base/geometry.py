@@ -217,17 +217,23 @@ def surface_digest(vertices: np.ndarray, faces: np.ndarray) -> bytes:
 
 
 def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rows of ``X`` grouped by equal values: ``np.unique(X, axis=0, return_index, return_inverse,
-    return_counts)`` without the unique rows, by one lexsort (3.6x faster on 5.3 million float32 rows: a written sculpt's corners).
+    """The rows of ``X`` grouped by equal values (``np.unique(X, axis=0, return_index, return_inverse,
+    return_counts)`` without the unique rows), the groups in the order of their first rows.
+
+    Each row's 64-bit hash, its top bits packed with the row's index, is sorted as one integer
+    (:func:`_grouped_by_hash`): 2.4x faster than a lexsort of the three float32 columns on 5.3 million rows
+    (a written sculpt's corners). Rows that hash alike but differ are then told apart by their values, so the
+    groups are exact. ``-0.0`` and ``0.0`` are one value; a NaN equals nothing, as under ``==``.
 
     Parameters
     ----------
     X : (n, d) array
+        Integer, boolean or floating point.
 
     Returns
     -------
     first : (k,) int64
-        The first row of each group, groups in the order of their rows' values.
+        The first row of each group, increasing.
     inverse : (n,) int64
         Each row's group.
     counts : (k,) int64
@@ -236,9 +242,79 @@ def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     X = np.asarray(X)
     if len(X) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    X = X.reshape(len(X), -1)
+    bits = _row_bits(X)
+    order, starts = _grouped_by_lexsort(X) if bits is None else _grouped_by_hash(X, _row_hash(bits))
+    first = order[starts]  # each group's rows come in increasing order
+    by_first = np.argsort(first)  # the groups renumbered in the order of their first rows
+    number = np.empty(len(first), np.int64)
+    number[by_first] = np.arange(len(first))
+    inverse = np.empty(len(X), np.int64)
+    inverse[order] = number[np.cumsum(starts) - 1]
+    return first[by_first].astype(np.int64), inverse, np.bincount(inverse, minlength=len(first))
+
+
+def _row_bits(X: np.ndarray) -> np.ndarray | None:
+    """``X``'s entries as unsigned 64-bit integers equal where the values are (``-0.0`` made ``0.0``), (n, d); None
+    for a kind of value that has no such bits (objects, strings)."""
+    if X.dtype.kind == "f" and X.dtype.itemsize <= 8:
+        Y = np.asarray(X, np.float32 if X.dtype.itemsize <= 4 else np.float64) + 0.0  # -0.0 + 0.0 is 0.0
+        return Y.view(np.uint32 if Y.dtype.itemsize == 4 else np.uint64).astype(np.uint64)
+    if X.dtype.kind in "biu":
+        return X.astype(np.uint64)
+    return None
+
+
+def _row_hash(bits: np.ndarray) -> np.ndarray:
+    """A 64-bit hash of each row of ``bits`` (n, d) uint64, its top bits well mixed; (n,) uint64."""
+    h = np.zeros(len(bits), np.uint64)
+    for j in range(bits.shape[1]):
+        h ^= bits[:, j] * np.uint64(_HASH_FACTORS[j % len(_HASH_FACTORS)])
+        h ^= h >> np.uint64(29)
+    h *= np.uint64(0xBF58476D1CE4E5B9)
+    h ^= h >> np.uint64(32)
+    return h
+
+
+#: Odd multipliers of :func:`_row_hash`, one per column (reused past the third).
+_HASH_FACTORS = (0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9)
+
+
+def _grouped_by_hash(X: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ordered so that equal ones are adjacent, each group's rows in increasing order; (order, starts).
+
+    The sort key is the hash's top bits above the row's index: one sort of integers, and rows of one hash
+    come out in increasing order. Hashes that collide on rows of different values are sorted by value within
+    their run (stably: still in increasing order).
+    """
+    n = len(X)
+    b = np.uint64(max(1, (n - 1).bit_length()))
+    key = (h >> b << b) | np.arange(n, dtype=np.uint64)
+    key.sort()
+    order = (key & ((np.uint64(1) << b) - np.uint64(1))).astype(np.int64)
+    same = (key[1:] >> b) == (key[:-1] >> b)
+    differ = _neighbours_differ(X, order)
+    if np.any(same & differ):  # distinct rows sharing a hash: order each such run by value
+        run = np.cumsum(np.r_[True, ~same]) - 1
+        at = np.flatnonzero(np.isin(run, run[1:][same & differ]))
+        by_value = np.lexsort((*X[order[at]].T[::-1], run[at]))
+        order[at] = order[at][by_value]
+        differ = _neighbours_differ(X, order)
+    return order, np.r_[True, ~same | differ]
+
+
+def _neighbours_differ(X: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Whether row ``order[i + 1]`` of ``X`` differs from row ``order[i]``, (n - 1,) bool (a column at a time: a
+    third of the time of gathering whole rows)."""
+    differ = np.zeros(len(order) - 1, bool)
+    for j in range(X.shape[1]):
+        column = X[:, j].take(order)
+        differ |= column[1:] != column[:-1]
+    return differ
+
+
+def _grouped_by_lexsort(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """As :func:`_grouped_by_hash`, by one lexsort of the columns (rows of any comparable kind)."""
     order = np.lexsort(X.T[::-1])  # by the first column, then the next; stable: each run starts at its first row
     ordered = X[order]
-    starts = np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)]
-    inverse = np.empty(len(X), np.int64)
-    inverse[order] = np.cumsum(starts) - 1
-    return order[starts].astype(np.int64), inverse, np.diff(np.r_[np.flatnonzero(starts), len(X)])
+    return order, np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)]
