@@ -14,7 +14,7 @@ section of that file.
 A model that fails is a row with its one-line reason; the run goes on. The
 section ends with the mean and the worst PrusaSlicer reduction.
 
-    python benchmarks/gltf.py [--models Fox quaternius/Wolf] [--out benchmarks/RESULTS.md]
+    python benchmarks/gltf.py [--models Fox quaternius/Wolf] [--particles N] [--iterations N] [--seed S] [--out benchmarks/RESULTS.md]
 """
 
 from __future__ import annotations
@@ -173,9 +173,10 @@ def main(argv=None):
                    help="SearchSettings.symmetric: None (the tool's choice), True or False.")
     p.add_argument("--particles", type=int, default=None, help="SearchSettings.particles.")
     p.add_argument("--iterations", type=int, default=None, help="SearchSettings.iterations.")
+    p.add_argument("--seed", type=int, default=None, help="SearchSettings.seed.")
     args = p.parse_args(argv)
     settings = sl.SearchSettings().replace(chain_limit=args.chain_limit, w_chain=args.w_chain,
-                                           particles=args.particles, iterations=args.iterations)
+                                           particles=args.particles, iterations=args.iterations, seed=args.seed)
     if args.no_anatomy:
         settings = settings.replace(anatomy=False)
     settings = settings.replace(symmetric={"auto": None, "on": True, "off": False}[args.symmetric])

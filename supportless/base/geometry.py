@@ -221,8 +221,8 @@ def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return_counts)`` without the unique rows), the groups in the order of their first rows.
 
     Each row's 64-bit hash, its top bits packed with the row's index, is sorted as one integer
-    (:func:`_grouped_by_hash`): 2.4x faster than a lexsort of the three float32 columns on 5.3 million rows
-    (a written sculpt's corners). Rows that hash alike but differ are then told apart by their values, so the
+    (:func:`_grouped_by_hash`): 1.0 s where a lexsort of the columns took 2.2 s on 5.3 million float32 rows
+    (a written sculpt's corners, 2 cores). Rows that hash alike but differ are then told apart by their values, so the
     groups are exact. ``-0.0`` and ``0.0`` are one value; a NaN equals nothing, as under ``==``.
 
     Parameters
@@ -243,8 +243,8 @@ def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if len(X) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64)
     X = X.reshape(len(X), -1)
-    bits = _row_bits(X)
-    order, starts = _grouped_by_lexsort(X) if bits is None else _grouped_by_hash(X, _row_hash(bits))
+    h = _row_hash(X)
+    order, starts = _grouped_by_lexsort(X) if h is None else _grouped_by_hash(X, h)
     first = order[starts]  # each group's rows come in increasing order
     by_first = np.argsort(first)  # the groups renumbered in the order of their first rows
     number = np.empty(len(first), np.int64)
@@ -254,22 +254,27 @@ def row_groups(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return first[by_first].astype(np.int64), inverse, np.bincount(inverse, minlength=len(first))
 
 
-def _row_bits(X: np.ndarray) -> np.ndarray | None:
-    """``X``'s entries as unsigned 64-bit integers equal where the values are (``-0.0`` made ``0.0``), (n, d); None
-    for a kind of value that has no such bits (objects, strings)."""
-    if X.dtype.kind == "f" and X.dtype.itemsize <= 8:
-        Y = np.asarray(X, np.float32 if X.dtype.itemsize <= 4 else np.float64) + 0.0  # -0.0 + 0.0 is 0.0
-        return Y.view(np.uint32 if Y.dtype.itemsize == 4 else np.uint64).astype(np.uint64)
-    if X.dtype.kind in "biu":
-        return X.astype(np.uint64)
+def _column_bits(column: np.ndarray) -> np.ndarray | None:
+    """A column's entries as unsigned 64-bit integers, equal where the values are (``-0.0`` made ``0.0``), (n,)
+    uint64; None for a kind of value that has no such bits (objects, strings, extended precision)."""
+    if column.dtype.kind == "f" and column.dtype.itemsize <= 8:
+        y = np.asarray(column, np.float32 if column.dtype.itemsize <= 4 else np.float64) + 0.0  # -0.0 + 0.0 is 0.0
+        return y.view(np.uint32 if y.dtype.itemsize == 4 else np.uint64).astype(np.uint64)
+    if column.dtype.kind in "biu":
+        return column.astype(np.uint64)
     return None
 
 
-def _row_hash(bits: np.ndarray) -> np.ndarray:
-    """A 64-bit hash of each row of ``bits`` (n, d) uint64, its top bits well mixed; (n,) uint64."""
-    h = np.zeros(len(bits), np.uint64)
-    for j in range(bits.shape[1]):
-        h ^= bits[:, j] * np.uint64(_HASH_FACTORS[j % len(_HASH_FACTORS)])
+def _row_hash(X: np.ndarray) -> np.ndarray | None:
+    """A 64-bit hash of each row of ``X`` (n, d), equal for equal rows, its top bits well mixed; (n,) uint64, or None
+    when :func:`_column_bits` has no bits for its values."""
+    h = np.zeros(len(X), np.uint64)
+    for j in range(X.shape[1]):
+        bits = _column_bits(X[:, j])
+        if bits is None:
+            return None
+        bits *= np.uint64(_HASH_FACTORS[j % len(_HASH_FACTORS)])
+        h ^= bits
         h ^= h >> np.uint64(29)
     h *= np.uint64(0xBF58476D1CE4E5B9)
     h ^= h >> np.uint64(32)
